@@ -1,0 +1,287 @@
+/*
+ * sss.h - screen-space subsurface scattering on Blender render passes.
+ *
+ * libsss blurs the diffuse light of a render (L = DiffDir + DiffInd) with a
+ * per-material diffusion profile that is projected through the real camera
+ * at every pixel's depth, and recombines the result with the other passes
+ * exactly as Blender does:
+ *
+ *   Combined = SSS(L) * DiffCol + (GlossDir + GlossInd) * GlossCol
+ *            + (TransDir + TransInd) * TransCol + Emit + Env
+ *
+ * USAGE
+ *   sss_passes passes = {0};          // views of the caller's pass buffers
+ *   passes.diff_dir = (sss_image){dd, w, h, 3, 0}; ... depth, index_ma ...
+ *   sss_camera cam;   sss_camera_default(&cam);   cam.lens_mm = 85; ...
+ *   sss_material mat; sss_material_default(&mat, SSS_PROFILE_BURLEY);
+ *   mat.pass_index = 1; mat.radius[0] = 0.004; ...           // metres
+ *   sss_options opt;  sss_options_default(&opt);
+ *   char err[256];
+ *   sss_result r = sss_apply(&passes, &cam, &mat, 1, &opt, &out, NULL,
+ *                            err, sizeof err);
+ *   if (r != SSS_OK) fprintf(stderr, "%s: %s\n", sss_status_string(r), err);
+ *
+ * UNITS
+ *   Depth and Position passes are in scene units; sss_camera.unit_scale says
+ *   how many metres one scene unit is (Blender's Unit Scale). Profile
+ *   lengths are in metres (Burley radius, Jimenez width), Gaussian variances
+ *   in mm^2 and near/far sigmas in mm, as in the literature they come from.
+ *
+ * PIXELS AND POLICIES
+ *   Images are row-major, top row first (as in EXR), float32, with any
+ *   channel count >= what the pass needs (extra channels are ignored).
+ *   The caller owns all memory; the library allocates scratch memory inside
+ *   a call and frees it before returning.
+ *   A pixel scatters when its material index (IndexMA, rounded) is in the
+ *   material table with a profile other than SSS_PROFILE_NONE and its depth
+ *   is finite, > 0 and < sss_options.background_depth. Every other pixel is
+ *   passed through untouched and is never used as a sample.
+ *   Non-finite values (NaN, Inf) in the light or colour passes are never
+ *   spread: such a sample is dropped like a sample on another material, and
+ *   the pixel itself keeps its own (non-finite) value.
+ *   Samples on another material, on the background, outside the image or
+ *   beyond the profile's support in true 3-D distance are dropped and the
+ *   remaining weights renormalised per channel: no halos, no bleeding, no
+ *   darkening at borders, and a constant image stays constant.
+ *
+ * THREADS
+ *   No global mutable state. Concurrent calls on different output buffers
+ *   are safe. Results are identical for any sss_options.num_threads.
+ */
+#ifndef SSS_H
+#define SSS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_WIN32)
+#define SSS_API __declspec(dllexport)
+#else
+#define SSS_API __attribute__((visibility("default")))
+#endif
+
+/* Bumped whenever a public struct or signature changes. */
+#define SSS_ABI_VERSION 1
+#define SSS_VERSION_STRING "0.1.0"
+
+/* ---------------------------------------------------------------- status */
+
+typedef int32_t sss_result; /* fixed-size return type; values are sss_status */
+
+enum sss_status {
+	SSS_OK = 0,                  /* success */
+	SSS_ERR_INVALID_ARGUMENT = 1,/* NULL, negative, NaN or out-of-range value */
+	SSS_ERR_SIZE_MISMATCH = 2,   /* pass buffers of different sizes */
+	SSS_ERR_MISSING_PASS = 3,    /* a required pass is absent */
+	SSS_ERR_OUT_OF_MEMORY = 4,   /* an allocation failed */
+	SSS_ERR_UNSUPPORTED = 5,     /* valid but not implemented (e.g. method) */
+	SSS_ERR_IO = 6,              /* file could not be read or written */
+	SSS_ERR_EXR = 7,             /* the EXR library reported an error */
+	SSS_ERR_UNKNOWN = 8          /* keep last */
+};
+
+/* "SSS_ERR_INVALID_ARGUMENT" etc.; "SSS_ERR_UNKNOWN" for unknown codes. */
+SSS_API const char *sss_status_name(sss_result code);
+/* A human sentence for the code; never NULL. */
+SSS_API const char *sss_status_string(sss_result code);
+
+SSS_API uint32_t sss_abi_version(void);
+SSS_API const char *sss_version_string(void);
+
+/* --------------------------------------------------------------- images */
+
+/* A non-owning view of one pass. data == NULL means "pass absent". */
+typedef struct sss_image {
+	float *data;
+	int32_t width;
+	int32_t height;
+	int32_t channels;   /* floats per pixel */
+	int64_t row_stride; /* floats between rows; 0 = width * channels */
+} sss_image;
+
+/* The render passes, as Blender names them. Absent passes count as zero
+ * (a missing colour pass as zero too, so its light is not added). */
+typedef struct sss_passes {
+	sss_image diff_dir;  /* required, RGB: diffuse direct light */
+	sss_image diff_ind;  /* RGB, Cycles only */
+	sss_image diff_col;  /* required, RGB: diffuse colour (albedo) */
+	sss_image gloss_dir, gloss_ind, gloss_col;
+	sss_image trans_dir, trans_ind, trans_col;
+	sss_image emit;      /* RGB */
+	sss_image env;       /* RGB */
+	sss_image combined;  /* optional RGBA; only its alpha is used */
+	sss_image depth;     /* required, 1 channel: planar view Z, scene units */
+	sss_image index_ma;  /* required, 1 channel: material pass_index */
+	sss_image position;  /* optional XYZ world position, scene units */
+} sss_passes;
+
+/* --------------------------------------------------------------- camera */
+
+enum sss_camera_type {
+	SSS_CAMERA_PERSPECTIVE = 0,
+	SSS_CAMERA_ORTHOGRAPHIC = 1
+};
+
+enum sss_sensor_fit { /* Blender's Camera.sensor_fit */
+	SSS_SENSOR_FIT_AUTO = 0,
+	SSS_SENSOR_FIT_HORIZONTAL = 1,
+	SSS_SENSOR_FIT_VERTICAL = 2
+};
+
+/* Blender's camera intrinsics; fill with sss_camera_default(). */
+typedef struct sss_camera {
+	uint32_t struct_size;
+	int32_t type;            /* sss_camera_type */
+	double lens_mm;          /* focal length, > 0 (perspective) */
+	double sensor_width_mm;  /* > 0 */
+	double sensor_height_mm; /* > 0 */
+	int32_t sensor_fit;      /* sss_sensor_fit */
+	double shift_x, shift_y; /* lens shift, fraction of the larger side */
+	double ortho_scale;      /* > 0 (orthographic), scene units */
+	double pixel_aspect_x;   /* > 0, Blender's render pixel_aspect_x */
+	double pixel_aspect_y;   /* > 0 */
+	double unit_scale;       /* > 0, metres per scene unit */
+} sss_camera;
+
+SSS_API void sss_camera_default(sss_camera *cam);
+
+/* ------------------------------------------------------------- profiles */
+
+enum sss_profile_kind {
+	SSS_PROFILE_NONE = 0,      /* material does not scatter */
+	SSS_PROFILE_BURLEY = 1,    /* Christensen-Burley normalized diffusion */
+	SSS_PROFILE_GAUSSIANS = 2, /* sum of Gaussians (d'Eon skin by default) */
+	SSS_PROFILE_JIMENEZ = 3,   /* Jimenez separable kernel */
+	SSS_PROFILE_NEAR_FAR = 4   /* artist near/far Gaussian pair */
+};
+
+/* How Blender's Subsurface Radius becomes Burley's shape parameter d. */
+enum sss_burley_mapping {
+	SSS_BURLEY_CYCLES = 0,      /* d = radius / (4 pi), Cycles' Burley */
+	SSS_BURLEY_EEVEE = 1,       /* d = 0.0459101 radius, EEVEE legacy */
+	SSS_BURLEY_RANDOM_WALK = 2  /* radius = diffuse mean free path:
+	                               d = radius / (3.5 + 100 (A - 0.33)^4) */
+};
+
+enum sss_texturing {
+	SSS_TEXTURING_POST = 0,         /* blur L, multiply by DiffCol after */
+	SSS_TEXTURING_PRE_AND_POST = 1  /* blur L*sqrt(DiffCol), times sqrt after */
+};
+
+#define SSS_MAX_GAUSSIANS 8
+
+/* One row of the per-material table. Fill with sss_material_default(),
+ * which sets the kind's published defaults, then change what you need. */
+typedef struct sss_material {
+	uint32_t struct_size;
+	int32_t pass_index;   /* 1..65535: the material's IndexMA value */
+	int32_t kind;         /* sss_profile_kind */
+	float strength;       /* 0..1: share of the diffuse light that scatters */
+	int32_t texturing;    /* sss_texturing */
+	int32_t taps;         /* taps per 1-D pass, 0 = sss_options.taps; 1..4097 */
+
+	/* SSS_PROFILE_BURLEY */
+	float radius[3];      /* metres per channel (Subsurface Radius x factor) */
+	int32_t burley_mapping; /* sss_burley_mapping */
+	float albedo[3];      /* 0..1, used by SSS_BURLEY_RANDOM_WALK */
+
+	/* SSS_PROFILE_GAUSSIANS: R(r) = sum_i weight[i][c] G(variance[i], r) */
+	int32_t gaussian_count;                     /* 1..SSS_MAX_GAUSSIANS */
+	float gaussian_variance[SSS_MAX_GAUSSIANS]; /* mm^2, > 0 */
+	float gaussian_weight[SSS_MAX_GAUSSIANS][3];/* >= 0, any sum > 0 */
+	float gaussian_scale;                       /* > 0, multiplies radii */
+
+	/* SSS_PROFILE_JIMENEZ (Jimenez et al. 2012 separable kernel) */
+	float jimenez_width;       /* metres: world span of 3 kernel units */
+	float jimenez_strength[3]; /* 0..1 per channel, like (0.48,0.41,0.28) */
+	float jimenez_falloff[3];  /* > 0 per channel, like (1.0,0.37,0.3) */
+
+	/* SSS_PROFILE_NEAR_FAR */
+	float scatter_scale;   /* >= 0, multiplies both sigmas */
+	float near_far_balance;/* 0..1: 1 = all near, 0 = all far */
+	float near_sigma[3];   /* mm per channel, > 0 */
+	float far_sigma[3];    /* mm per channel, > 0 */
+} sss_material;
+
+/* Sets struct_size, kind and that kind's defaults (d'Eon skin for
+ * Gaussians, the demo values for Jimenez and near/far, Blender's default
+ * radius (1, 0.2, 0.1) cm-scale for Burley). pass_index is left 0. */
+SSS_API void sss_material_default(sss_material *mat, int32_t kind);
+
+/* Checks one material; detail about the first bad field goes to errbuf. */
+SSS_API sss_result sss_material_validate(const sss_material *mat,
+                                         char *errbuf, size_t errbuf_len);
+
+/* Burley d (metres) per channel for a Burley material, as used. */
+SSS_API sss_result sss_burley_d(const sss_material *mat, double d_out[3]);
+
+/* Burley radial CDF P(r) = 1 - e^{-r/d}/4 - 3 e^{-r/(3d)}/4 (d > 0). */
+SSS_API double sss_burley_cdf(double r, double d);
+/* Its closed-form inverse for u in [0, 1); r for P(r) = u. */
+SSS_API double sss_burley_inverse_cdf(double u, double d);
+/* Burley profile R(r) = (e^{-r/d} + e^{-r/(3d)}) / (8 pi d r), per area. */
+SSS_API double sss_burley_profile(double r, double d);
+
+/* Distance (metres) beyond which the material's profile is treated as 0:
+ * the largest over channels, before sss_options.radius_scale. */
+SSS_API sss_result sss_material_support(const sss_material *mat,
+                                        double *metres);
+
+/* The 1-D kernel the separable method uses for this material at a given
+ * projection (pixels per metre) on a flat, fronto-parallel surface with
+ * nothing rejected: tap offsets in pixels and per-channel weights that sum
+ * to 1. taps <= 0 means the material's or the default tap count. On input
+ * *count is the capacity of the arrays (weights has 3 * capacity floats);
+ * on output the number of taps written. */
+SSS_API sss_result sss_kernel_1d(const sss_material *mat,
+                                 double pixels_per_metre, int32_t taps,
+                                 float *offsets, float *weights,
+                                 int32_t *count);
+
+/* --------------------------------------------------------------- options */
+
+enum sss_method {
+	SSS_METHOD_SEPARABLE = 0, /* two 1-D passes, all lobes at once */
+	SSS_METHOD_SEPARABLE_EXACT = 1, /* reserved: per-lobe passes */
+	SSS_METHOD_DISK = 2,      /* reserved: stratified disk sampling */
+	SSS_METHOD_REFERENCE = 3  /* brute-force 2-D, true distances: slow */
+};
+
+typedef struct sss_options {
+	uint32_t struct_size;
+	int32_t method;          /* sss_method */
+	float radius_scale;      /* >= 0, multiplies every profile length */
+	int32_t taps;            /* default taps per 1-D pass, 1..4097 (odd) */
+	int32_t num_threads;     /* 0 = all cores, 1..256 */
+	double background_depth; /* > 0: depth >= this is background (1e9) */
+	int32_t max_support_px;  /* >= 1: cap on a kernel's half-width */
+} sss_options;
+
+SSS_API void sss_options_default(sss_options *opt);
+
+/* Sizes of the public structs, so bindings can check their layouts. */
+SSS_API size_t sss_struct_size(const char *struct_name);
+
+/* ------------------------------------------------------------------ run */
+
+/* Scatters the diffuse light and writes the recombined image.
+ * out_combined: RGB or RGBA (alpha from passes->combined, else 1), may be
+ * NULL if only the light is wanted. out_diffuse_light: RGB, optional: the
+ * scattered diffuse light, so that contribution = light * DiffCol.
+ * Outputs must have the passes' size and must not alias any input.
+ * errbuf (optional) receives a sentence naming the bad pass or field. */
+SSS_API sss_result sss_apply(const sss_passes *passes, const sss_camera *cam,
+                             const sss_material *materials,
+                             int32_t material_count, const sss_options *opt,
+                             const sss_image *out_combined,
+                             const sss_image *out_diffuse_light,
+                             char *errbuf, size_t errbuf_len);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* SSS_H */

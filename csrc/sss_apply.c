@@ -1,0 +1,352 @@
+/* sss_apply.c - the public entry point: validates the passes, builds one
+ * kernel per material, prepares the light to scatter, runs the method and
+ * recombines the passes as Blender does. */
+#include "sss_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
+
+static int64_t stride_of(const sss_image *im)
+{
+	return im->row_stride ? im->row_stride
+	                      : (int64_t)im->width * im->channels;
+}
+
+static const float *pixel(const sss_image *im, int32_t x, int32_t y)
+{
+	return im->data + y * stride_of(im) + (int64_t)x * im->channels;
+}
+
+/* Checks one pass view against the reference size; absent optional passes
+ * (data == NULL) are fine. */
+static sss_result check_image(const char *name, const sss_image *im,
+                              int32_t min_channels, int required, int32_t w,
+                              int32_t h, char *errbuf, size_t errbuf_len)
+{
+	if (!im->data) {
+		if (required)
+			return FAILX(SSS_ERR_MISSING_PASS, "pass %s is required but "
+			             "absent", name);
+		return SSS_OK;
+	}
+	if (im->width <= 0 || im->height <= 0)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: image size %dx%d "
+		             "must be at least 1x1", name, im->width, im->height);
+	if (im->channels < min_channels)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s has %d channel(s), "
+		             "needs %d", name, im->channels, min_channels);
+	if (im->row_stride != 0 &&
+	    im->row_stride < (int64_t)im->width * im->channels)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: row_stride %lld "
+		             "is smaller than width x channels", name,
+		             (long long)im->row_stride);
+	if (im->width != w || im->height != h)
+		return FAILX(SSS_ERR_SIZE_MISMATCH, "pass %s is %dx%d but DiffDir "
+		             "is %dx%d", name, im->width, im->height, w, h);
+	return SSS_OK;
+}
+
+/* Byte range an image view touches, for the aliasing check. */
+static void image_span(const sss_image *im, const char **lo, const char **hi)
+{
+	*lo = (const char *)im->data;
+	*hi = (const char *)(im->data + (im->height - 1) * stride_of(im) +
+	                     (int64_t)im->width * im->channels);
+}
+
+static sss_result check_output(const char *name, const sss_image *out,
+                               const sss_passes *p, int32_t w, int32_t h,
+                               char *errbuf, size_t errbuf_len)
+{
+	if (!out)
+		return SSS_OK;
+	if (!out->data)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "output %s has no data", name);
+	sss_result r = check_image(name, out, 3, 1, w, h, errbuf, errbuf_len);
+	if (r)
+		return r;
+	const sss_image *inputs[] = {
+		&p->diff_dir, &p->diff_ind, &p->diff_col, &p->gloss_dir,
+		&p->gloss_ind, &p->gloss_col, &p->trans_dir, &p->trans_ind,
+		&p->trans_col, &p->emit, &p->env, &p->combined, &p->depth,
+		&p->index_ma, &p->position,
+	};
+	const char *olo, *ohi;
+	image_span(out, &olo, &ohi);
+	for (size_t i = 0; i < sizeof inputs / sizeof *inputs; i++) {
+		if (!inputs[i]->data)
+			continue;
+		const char *lo, *hi;
+		image_span(inputs[i], &lo, &hi);
+		if (olo < hi && lo < ohi)
+			return FAILX(SSS_ERR_INVALID_ARGUMENT, "output %s overlaps an "
+			             "input pass; inputs are never overwritten", name);
+	}
+	return SSS_OK;
+}
+
+static sss_result check_options(const sss_options *o, char *errbuf,
+                                size_t errbuf_len)
+{
+	if (o->struct_size != sizeof *o)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: struct_size %u, "
+		             "expected %zu (use sss_options_default)", o->struct_size,
+		             sizeof *o);
+	if (o->method == SSS_METHOD_SEPARABLE_EXACT ||
+	    o->method == SSS_METHOD_DISK)
+		return FAILX(SSS_ERR_UNSUPPORTED, "options: method %d is not "
+		             "available in this version", o->method);
+	if (o->method != SSS_METHOD_SEPARABLE &&
+	    o->method != SSS_METHOD_REFERENCE)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: unknown method %d",
+		             o->method);
+	if (!(isfinite(o->radius_scale) && o->radius_scale >= 0.0f))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: radius_scale %g "
+		             "must be finite and >= 0", (double)o->radius_scale);
+	if (o->taps < 1 || o->taps > 4097)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: taps %d must be "
+		             "1..4097", o->taps);
+	if (o->num_threads < 0 || o->num_threads > 256)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: num_threads %d "
+		             "must be 0 (all cores) .. 256", o->num_threads);
+	if (!(o->background_depth > 0.0))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: background_depth "
+		             "%g must be > 0", o->background_depth);
+	if (o->max_support_px < 1)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: max_support_px %d "
+		             "must be >= 1", o->max_support_px);
+	return SSS_OK;
+}
+
+static void add_scaled(float *acc, const sss_image *light_a,
+                       const sss_image *light_b, const sss_image *colour,
+                       int32_t x, int32_t y)
+{
+	if (!colour->data || (!light_a->data && !light_b->data))
+		return;
+	const float *c = pixel(colour, x, y);
+	for (int k = 0; k < 3; k++) {
+		float l = 0.0f;
+		if (light_a->data)
+			l += pixel(light_a, x, y)[k];
+		if (light_b->data)
+			l += pixel(light_b, x, y)[k];
+		acc[k] += l * c[k];
+	}
+}
+
+static void add_plain(float *acc, const sss_image *im, int32_t x, int32_t y)
+{
+	if (!im->data)
+		return;
+	const float *v = pixel(im, x, y);
+	for (int k = 0; k < 3; k++)
+		acc[k] += v[k];
+}
+
+sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
+                     const sss_material *materials, int32_t material_count,
+                     const sss_options *user_opt,
+                     const sss_image *out_combined,
+                     const sss_image *out_diffuse_light, char *errbuf,
+                     size_t errbuf_len)
+{
+	sss_result r;
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (!p || !cam)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s is NULL",
+		             p ? "camera" : "passes");
+	if (material_count < 0 || material_count > 32767 ||
+	    (material_count > 0 && !materials))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "material_count %d must be "
+		             "0..32767 with a table", material_count);
+	if (!out_combined && !out_diffuse_light)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "no output image given");
+
+	sss_options opt;
+	sss_options_default(&opt);
+	if (user_opt)
+		opt = *user_opt;
+	if ((r = check_options(&opt, errbuf, errbuf_len)))
+		return r;
+
+	if ((r = check_image("DiffDir", &p->diff_dir, 3, 1, p->diff_dir.width,
+	                     p->diff_dir.height, errbuf, errbuf_len)))
+		return r;
+	int32_t w = p->diff_dir.width, h = p->diff_dir.height;
+	if ((uint64_t)w * (uint64_t)h > SIZE_MAX / (3 * sizeof(float)) / 2)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "image %dx%d is too large",
+		             w, h);
+	struct {
+		const char *name;
+		const sss_image *im;
+		int32_t channels;
+		int required;
+	} passes[] = {
+		{"DiffInd", &p->diff_ind, 3, 0}, {"DiffCol", &p->diff_col, 3, 1},
+		{"GlossDir", &p->gloss_dir, 3, 0}, {"GlossInd", &p->gloss_ind, 3, 0},
+		{"GlossCol", &p->gloss_col, 3, 0}, {"TransDir", &p->trans_dir, 3, 0},
+		{"TransInd", &p->trans_ind, 3, 0}, {"TransCol", &p->trans_col, 3, 0},
+		{"Emit", &p->emit, 3, 0}, {"Env", &p->env, 3, 0},
+		{"Combined", &p->combined, 4, 0}, {"Depth", &p->depth, 1, 1},
+		{"IndexMA", &p->index_ma, 1, 1}, {"Position", &p->position, 3, 0},
+	};
+	for (size_t i = 0; i < sizeof passes / sizeof *passes; i++)
+		if ((r = check_image(passes[i].name, passes[i].im,
+		                     passes[i].channels, passes[i].required, w, h,
+		                     errbuf, errbuf_len)))
+			return r;
+	if ((r = check_output("combined", out_combined, p, w, h, errbuf,
+	                      errbuf_len)) ||
+	    (r = check_output("diffuse light", out_diffuse_light, p, w, h,
+	                      errbuf, errbuf_len)))
+		return r;
+	if ((r = sss__projection_make(cam, w, h, &(sss__projection){0}, errbuf,
+	                              errbuf_len)))
+		return r;
+	for (int32_t m = 0; m < material_count; m++) {
+		if ((r = sss_material_validate(&materials[m], errbuf, errbuf_len)))
+			return r;
+		for (int32_t n = 0; n < m; n++)
+			if (materials[n].pass_index == materials[m].pass_index)
+				return FAILX(SSS_ERR_INVALID_ARGUMENT, "material pass_index "
+				             "%d appears twice in the table",
+				             materials[m].pass_index);
+	}
+
+	/* All allocations up front, one error path. */
+	size_t npix = (size_t)w * (size_t)h;
+	sss__kernel *kernels = calloc(material_count ? material_count : 1,
+	                              sizeof *kernels);
+	int16_t *by_index = malloc(65536 * sizeof *by_index);
+	int16_t *slot = malloc(npix * sizeof *slot);
+	float *signal = malloc(npix * 3 * sizeof *signal);
+	float *scratch = malloc(npix * 3 * sizeof *scratch);
+	if (!kernels || !by_index || !slot || !signal || !scratch) {
+		r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working memory "
+		          "for a %dx%d image", w, h);
+		goto done;
+	}
+
+	for (int i = 0; i < 65536; i++)
+		by_index[i] = -1;
+	for (int32_t m = 0; m < material_count; m++) {
+		sss__kernel_build(&materials[m], &opt, cam->unit_scale, &kernels[m]);
+		if (kernels[m].support > 0.0)
+			by_index[materials[m].pass_index] = (int16_t)m;
+	}
+
+	sss__job job = {
+		.width = w, .height = h, .kernels = kernels, .slot = slot,
+		.depth = p->depth.data, .depth_stride = stride_of(&p->depth),
+		.depth_channels = p->depth.channels,
+		.position = p->position.data,
+		.position_stride = p->position.data ? stride_of(&p->position) : 0,
+		.position_channels = p->position.channels,
+		.max_support_px = opt.max_support_px,
+		.signal = signal, .scratch = scratch,
+	};
+	sss__projection_make(cam, w, h, &job.proj, NULL, 0);
+
+	/* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
+	 * pre-and-post texturing. Anything non-finite is left out. */
+	for (int32_t y = 0; y < h; y++) {
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			float *s = signal + 3 * i;
+			const float *dd = pixel(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
+			                                   : NULL;
+			for (int c = 0; c < 3; c++)
+				s[c] = di ? dd[c] + di[c] : dd[c];
+
+			float index = pixel(&p->index_ma, x, y)[0];
+			float z = pixel(&p->depth, x, y)[0];
+			int16_t k = -1;
+			if (index >= 0.5f && index < 65535.5f)
+				k = by_index[(int32_t)(index + 0.5f)];
+			if (!(z > 0.0f && z < opt.background_depth))
+				k = -1;
+			if (k >= 0 && p->position.data &&
+			    !sss__isfinite3(pixel(&p->position, x, y)))
+				k = -1;
+			if (k >= 0 && kernels[k].texturing ==
+			              SSS_TEXTURING_PRE_AND_POST) {
+				const float *col = pixel(&p->diff_col, x, y);
+				for (int c = 0; c < 3; c++)
+					s[c] *= sqrtf(fmaxf(col[c], 0.0f));
+			}
+			if (k >= 0 && !sss__isfinite3(s))
+				k = -1;
+			slot[i] = k;
+		}
+	}
+
+	if (material_count > 0) {
+		if (opt.method == SSS_METHOD_REFERENCE)
+			r = sss__reference(&job, opt.num_threads);
+		else
+			r = sss__separable(&job, opt.num_threads);
+		if (r)
+			goto done;
+	}
+
+	/* Back to light (contribution = light x DiffCol) and recombine. */
+	for (int32_t y = 0; y < h; y++) {
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			const float *dd = pixel(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
+			                                   : NULL;
+			const float *col = pixel(&p->diff_col, x, y);
+			float light[3];
+			for (int c = 0; c < 3; c++) {
+				float l = di ? dd[c] + di[c] : dd[c];
+				if (slot[i] >= 0 && kernels[slot[i]].mix[c] > 0.0f) {
+					l = signal[3 * i + c];
+					if (kernels[slot[i]].texturing ==
+					    SSS_TEXTURING_PRE_AND_POST) {
+						float root = sqrtf(fmaxf(col[c], 0.0f));
+						l = root > 0.0f ? l / root : (di ? dd[c] + di[c]
+						                                 : dd[c]);
+					}
+				}
+				light[c] = l;
+			}
+			if (out_diffuse_light) {
+				float *o = out_diffuse_light->data +
+				           y * stride_of(out_diffuse_light) +
+				           (int64_t)x * out_diffuse_light->channels;
+				memcpy(o, light, sizeof light);
+			}
+			if (out_combined) {
+				float acc[3];
+				for (int c = 0; c < 3; c++)
+					acc[c] = light[c] * col[c];
+				add_scaled(acc, &p->gloss_dir, &p->gloss_ind, &p->gloss_col,
+				           x, y);
+				add_scaled(acc, &p->trans_dir, &p->trans_ind, &p->trans_col,
+				           x, y);
+				add_plain(acc, &p->emit, x, y);
+				add_plain(acc, &p->env, x, y);
+				float *o = out_combined->data + y * stride_of(out_combined) +
+				           (int64_t)x * out_combined->channels;
+				memcpy(o, acc, sizeof acc);
+				if (out_combined->channels >= 4)
+					o[3] = p->combined.data ? pixel(&p->combined, x, y)[3]
+					                        : 1.0f;
+			}
+		}
+	}
+	r = SSS_OK;
+done:
+	free(kernels);
+	free(by_index);
+	free(slot);
+	free(signal);
+	free(scratch);
+	return r;
+}

@@ -1,0 +1,95 @@
+/* sss_camera.c - Blender's camera model: pixels <-> view-space positions.
+ *
+ * Follows BKE_camera_params_compute_viewplane (Blender 3.x): the sensor
+ * (or ortho scale) spans the image's larger side after pixel aspect, unless
+ * the sensor fit says which side; lens shift moves the principal point by
+ * a fraction of that side. Depth is planar view Z, so a pixel's position
+ * is ((u - cx) z / fx, (cy - v) z / fy, z) for perspective cameras.
+ */
+#include "sss_internal.h"
+
+sss_result sss__projection_make(const sss_camera *cam, int32_t width,
+                                int32_t height, sss__projection *p,
+                                char *errbuf, size_t errbuf_len)
+{
+#define BAD(field, cond) \
+	if (!(isfinite(cam->field) && (cond))) \
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
+		                 "camera: " #field " = %g is out of range", \
+		                 (double)cam->field)
+	if (cam->struct_size != sizeof *cam)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
+		                 "camera: struct_size %u, expected %zu (use "
+		                 "sss_camera_default)", cam->struct_size, sizeof *cam);
+	if (cam->type != SSS_CAMERA_PERSPECTIVE &&
+	    cam->type != SSS_CAMERA_ORTHOGRAPHIC)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
+		                 "camera: unknown type %d", cam->type);
+	if (cam->sensor_fit < SSS_SENSOR_FIT_AUTO ||
+	    cam->sensor_fit > SSS_SENSOR_FIT_VERTICAL)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
+		                 "camera: unknown sensor_fit %d", cam->sensor_fit);
+	BAD(pixel_aspect_x, cam->pixel_aspect_x > 0);
+	BAD(pixel_aspect_y, cam->pixel_aspect_y > 0);
+	BAD(unit_scale, cam->unit_scale > 0);
+	BAD(shift_x, 1);
+	BAD(shift_y, 1);
+	if (cam->type == SSS_CAMERA_PERSPECTIVE) {
+		BAD(lens_mm, cam->lens_mm > 0);
+		BAD(sensor_width_mm, cam->sensor_width_mm > 0);
+		BAD(sensor_height_mm, cam->sensor_height_mm > 0);
+	} else {
+		BAD(ortho_scale, cam->ortho_scale > 0);
+	}
+#undef BAD
+
+	double ycor = cam->pixel_aspect_y / cam->pixel_aspect_x;
+	int fit = cam->sensor_fit;
+	double sensor = fit == SSS_SENSOR_FIT_VERTICAL ? cam->sensor_height_mm
+	                                               : cam->sensor_width_mm;
+	if (fit == SSS_SENSOR_FIT_AUTO)
+		fit = cam->pixel_aspect_x * width >= cam->pixel_aspect_y * height
+		      ? SSS_SENSOR_FIT_HORIZONTAL : SSS_SENSOR_FIT_VERTICAL;
+	double viewfac = fit == SSS_SENSOR_FIT_HORIZONTAL ? (double)width
+	                                                  : ycor * height;
+	/* Size of one pixel (horizontally) at depth 1, or absolute (ortho). */
+	double pixsize = cam->type == SSS_CAMERA_ORTHOGRAPHIC
+	                 ? cam->ortho_scale : sensor / cam->lens_mm;
+	pixsize /= viewfac;
+
+	p->ortho = cam->type == SSS_CAMERA_ORTHOGRAPHIC;
+	p->fx = 1.0 / pixsize;
+	p->fy = 1.0 / (pixsize * ycor);
+	p->cx = 0.5 * width - cam->shift_x * viewfac;
+	p->cy = 0.5 * height + cam->shift_y * viewfac / ycor;
+	return SSS_OK;
+}
+
+double sss__pixels_per_unit_x(const sss__projection *p, double z)
+{
+	return p->ortho ? p->fx : p->fx / z;
+}
+
+double sss__pixels_per_unit_y(const sss__projection *p, double z)
+{
+	return p->ortho ? p->fy : p->fy / z;
+}
+
+void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
+                         double out[3])
+{
+	if (job->position) {
+		const float *q = job->position + y * job->position_stride +
+		                 (int64_t)x * job->position_channels;
+		out[0] = q[0];
+		out[1] = q[1];
+		out[2] = q[2];
+		return;
+	}
+	double z = job->depth[y * job->depth_stride + (int64_t)x *
+	                      job->depth_channels];
+	double scale = job->proj.ortho ? 1.0 : z;
+	out[0] = (x + 0.5 - job->proj.cx) / job->proj.fx * scale;
+	out[1] = (job->proj.cy - (y + 0.5)) / job->proj.fy * scale;
+	out[2] = z;
+}

@@ -1,0 +1,114 @@
+/* sss_internal.h - private types and helpers shared by libsss's files. */
+#ifndef SSS_INTERNAL_H
+#define SSS_INTERNAL_H
+
+#include "sss.h"
+
+#include <math.h>
+#include <stdarg.h>
+
+#define SSS__PI 3.14159265358979323846
+
+/* Profile tables are sampled at x = support * (k / (N-1))^2: dense near
+ * the centre, where Burley's 1/r and its marginal's log singularity live. */
+#define SSS__TABLE_SIZE 1024
+
+/* A material turned into what the blur loops read: everything in scene
+ * units (after unit_scale and radius_scale), tabulated once per call. */
+typedef struct sss__kernel {
+	double support;      /* scene units; 0 = no scattering */
+	float mix[3];        /* per-channel share that scatters (strength) */
+	int32_t texturing;   /* sss_texturing */
+	int32_t taps;        /* odd, >= 1 */
+	/* Per channel, at x_k = support * (k/(N-1))^2: */
+	float line_cdf[3][SSS__TABLE_SIZE]; /* integral of M over [0, x] */
+	float area[3][SSS__TABLE_SIZE];     /* radial profile R(r) per area */
+	float area_cdf[3][SSS__TABLE_SIZE]; /* radial CDF: mass inside r */
+} sss__kernel;
+
+/* Pinhole or orthographic projection in pixels (Blender's viewplane). */
+typedef struct sss__projection {
+	int ortho;
+	double fx, fy; /* pixels per scene unit at depth 1 (ortho: at any depth) */
+	double cx, cy; /* principal point, pixels from the left / the top edge */
+} sss__projection;
+
+/* Everything one blur needs, read-only while the threads run. */
+typedef struct sss__job {
+	int32_t width, height;
+	const sss__kernel *kernels;
+	const int16_t *slot;    /* per pixel: kernel index, or -1 = not scattering */
+	const float *depth;     /* view of the Depth pass */
+	int64_t depth_stride;
+	int32_t depth_channels;
+	const float *position;  /* optional Position pass */
+	int64_t position_stride;
+	int32_t position_channels;
+	sss__projection proj;
+	int32_t max_support_px;
+	float *signal;          /* RGB, packed: the light to scatter */
+	float *scratch;         /* RGB, packed: the horizontal pass */
+} sss__job;
+
+/* errbuf helper: formats into errbuf when given, returns code. */
+sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
+                     const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+
+/* Profiles (sss_profile.c). */
+sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
+                             double unit_scale, sss__kernel *k);
+float sss__table_lookup(const float *table, double x, double inv_support);
+/* Mass of the 1-D profile over [a, b] (b >= a; either may be negative),
+ * per channel. */
+void sss__line_mass3(const sss__kernel *k, double a, double b,
+                     double out[3]);
+
+/* Camera (sss_camera.c). */
+sss_result sss__projection_make(const sss_camera *cam, int32_t width,
+                                int32_t height, sss__projection *p,
+                                char *errbuf, size_t errbuf_len);
+void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
+                         double out[3]);
+double sss__pixels_per_unit_x(const sss__projection *p, double z);
+double sss__pixels_per_unit_y(const sss__projection *p, double z);
+
+/* Taps right of the centre (sss_separable.c); arrays hold
+ * SSS__MAX_HALF_TAPS entries. */
+#define SSS__MAX_HALF_TAPS 2048
+typedef struct sss__tap {
+	double offset;  /* pixels from the centre */
+	double lo, hi;  /* the tap's cell along the axis, pixels */
+} sss__tap;
+int32_t sss__tap_layout(int32_t taps, double r, sss__tap *tap);
+
+/* Methods (sss_separable.c, sss_reference.c): scatter job->signal in place
+ * for every pixel whose slot >= 0. */
+sss_result sss__separable(const sss__job *job, int32_t num_threads);
+sss_result sss__reference(const sss__job *job, int32_t num_threads);
+
+/* out = out + mix (blurred - out) per channel; mix 0 leaves out untouched
+ * bit for bit and mix 1 gives blurred exactly. */
+static inline void sss__blend_pixel(const sss__kernel *k, const float *blurred,
+                                    float *out)
+{
+	for (int c = 0; c < 3; c++) {
+		float m = k->mix[c];
+		if (m >= 1.0f)
+			out[c] = blurred[c];
+		else if (m > 0.0f)
+			out[c] = out[c] + m * (blurred[c] - out[c]);
+	}
+}
+
+/* Row-band threading (sss_threads.c): fn(ctx, y0, y1) over [0, height). */
+typedef void (*sss__rows_fn)(void *ctx, int32_t y0, int32_t y1);
+void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
+                        void *ctx);
+
+static inline int sss__isfinite3(const float *v)
+{
+	return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+#endif /* SSS_INTERNAL_H */

@@ -1,0 +1,20 @@
+#!/bin/sh
+# Installs the Debian packages the build and tests need, when they are
+# missing and we are root; otherwise says what to install. Idempotent.
+set -u
+PACKAGES="gcc make libc6-dev libpng-dev pkg-config binutils"
+missing=""
+for p in $PACKAGES; do
+	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" \
+		|| missing="$missing $p"
+done
+[ -z "$missing" ] && exit 0
+if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+	echo "installing:$missing"
+	export DEBIAN_FRONTEND=noninteractive
+	apt-get update -qq && apt-get install -y -qq --no-install-recommends $missing \
+		>/dev/null || { echo "apt-get install failed for:$missing" >&2; exit 1; }
+else
+	echo "missing Debian packages:$missing (run as root, or: sudo apt-get install$missing)" >&2
+	exit 1
+fi

@@ -1,0 +1,207 @@
+/* test_extremes.c - numerical soundness at the extremes: tiny and huge
+ * radii, bad depths, NaN/Inf/huge/denormal pass values, degenerate image
+ * shapes and tap counts, for every method.
+ *
+ * Policy under test (see sss.h): a pixel with a non-finite light or colour
+ * keeps its own value and is never used as a sample; a pixel with a depth
+ * that is not finite and > 0, or at/after the background depth, is passed
+ * through and never sampled. Everything else must come out finite. */
+#include "synth.h"
+#include "test_util.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE};
+
+typedef struct shape {
+	int w, h;
+} shape;
+
+static const shape shapes[] = {{1, 1}, {1, 7}, {7, 1}, {3, 3}, {9, 5}};
+
+enum poison_kind { POISON_NONE, POISON_DEPTH, POISON_LIGHT, POISON_COLOUR };
+
+static const struct poison {
+	const char *name;
+	int kind;
+	float value;
+} poisons[] = {
+	{"none", POISON_NONE, 0},
+	{"depth=0", POISON_DEPTH, 0.0f},
+	{"depth=-1", POISON_DEPTH, -1.0f},
+	{"depth=NaN", POISON_DEPTH, NAN},
+	{"depth=Inf", POISON_DEPTH, INFINITY},
+	{"depth=1e10", POISON_DEPTH, 1e10f},
+	{"depth=1e-6", POISON_DEPTH, 1e-6f},
+	{"light=NaN", POISON_LIGHT, NAN},
+	{"light=Inf", POISON_LIGHT, INFINITY},
+	{"light=-Inf", POISON_LIGHT, -INFINITY},
+	{"light=1e30", POISON_LIGHT, 1e30f},
+	{"light=65504", POISON_LIGHT, 65504.0f},
+	{"light=denormal", POISON_LIGHT, 1e-40f},
+	{"colour=NaN", POISON_COLOUR, NAN},
+	{"colour=1e30", POISON_COLOUR, 1e30f},
+};
+
+static const float radii[] = {0.0f, 1e-9f, 1e-4f, 0.01f, 1.0f, 1e3f};
+static const int taps[] = {1, 3, 33, 1000};
+
+static int finite3(const float *v)
+{
+	return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+static void run_case(const shape *sh, const struct poison *po, float radius,
+                     int tap, int method, int texturing, int *cases)
+{
+	int w = sh->w, h = sh->h;
+	synth *s = synth_new(w, h);
+	synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
+	for (size_t i = 0; i < (size_t)3 * w * h; i++) {
+		s->diff_dir[i] = 0.25f + 0.01f * (float)(i % 7);
+		s->diff_col[i] = 0.5f;
+	}
+	size_t centre = (size_t)(h / 2) * w + w / 2;
+	if (po->kind == POISON_DEPTH)
+		s->depth[centre] = po->value;
+	for (int c = 0; c < 3; c++) {
+		if (po->kind == POISON_LIGHT)
+			s->diff_dir[3 * centre + c] = po->value;
+		if (po->kind == POISON_COLOUR)
+			s->diff_col[3 * centre + c] = po->value;
+	}
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.radius[0] = radius;
+	m.radius[1] = radius * 0.5f;
+	m.radius[2] = radius * 0.25f;
+	m.texturing = texturing;
+	m.taps = tap;
+	sss_options o;
+	sss_options_default(&o);
+	o.method = method;
+	o.max_support_px = 64;
+	sss_passes p = synth_passes(s);
+	sss_camera cam;
+	sss_camera_default(&cam);
+	float *light = calloc((size_t)3 * w * h, sizeof(float));
+	float *comb = calloc((size_t)4 * w * h, sizeof(float));
+	sss_image ol = {light, w, h, 3, 0}, oc = {comb, w, h, 4, 0};
+	char err[256] = "";
+	sss_result r = sss_apply(&p, &cam, &m, 1, &o, &oc, &ol, err, sizeof err);
+
+	char id[128];
+	snprintf(id, sizeof id, "extreme-%dx%d/%s/r=%g/taps=%d/m=%d/t=%d", w, h,
+	         po->name, (double)radius, tap, method, texturing);
+	(*cases)++;
+	CHECK(id, r == SSS_OK, "%s: %s", sss_status_name(r), err);
+	int spread = 0, own = 1;
+	for (size_t i = 0; i < (size_t)w * h; i++) {
+		int input_finite = finite3(s->diff_dir + 3 * i) &&
+		                   finite3(s->diff_col + 3 * i);
+		int out_finite = finite3(light + 3 * i) && finite3(comb + 4 * i);
+		if (i != centre && !out_finite)
+			spread = 1;
+		if (input_finite && !out_finite)
+			own = 0;
+	}
+	CHECK(id, !spread, "a non-finite value reached a neighbour");
+	CHECK(id, own, "a finite input pixel came out non-finite");
+	free(light);
+	free(comb);
+	synth_free(s);
+}
+
+/* A constant image stays constant even for absurd radii and tap counts. */
+static void test_constant_extremes(void)
+{
+	for (size_t r = 0; r < sizeof radii / sizeof *radii; r++)
+		for (size_t t = 0; t < sizeof taps / sizeof *taps; t++)
+			for (size_t mt = 0; mt < 2; mt++) {
+				int w = 13, h = 11;
+				synth *s = synth_new(w, h);
+				synth_plane(s, 0, 0, w, h, 1.0f, 1.0f);
+				for (size_t i = 0; i < (size_t)3 * w * h; i++)
+					s->diff_dir[i] = 0.7f;
+				sss_material m;
+				sss_material_default(&m, SSS_PROFILE_BURLEY);
+				m.pass_index = 1;
+				m.radius[0] = m.radius[1] = m.radius[2] = radii[r];
+				m.taps = taps[t];
+				sss_options o;
+				sss_options_default(&o);
+				o.method = methods[mt];
+				sss_passes p = synth_passes(s);
+				sss_camera cam;
+				sss_camera_default(&cam);
+				float *light = calloc((size_t)3 * w * h, sizeof(float));
+				sss_image ol = {light, w, h, 3, 0};
+				sss_result res = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol,
+				                           NULL, 0);
+				double worst = 0;
+				for (size_t i = 0; i < (size_t)3 * w * h; i++)
+					worst = fmax(worst, fabs(light[i] - 0.7f));
+				char id[96];
+				snprintf(id, sizeof id, "constant-r=%g/taps=%d/m=%zu",
+				         (double)radii[r], taps[t], mt);
+				CHECK(id, res == SSS_OK && worst < 1e-6, "deviation %g",
+				      worst);
+				free(light);
+				synth_free(s);
+			}
+}
+
+/* Huge unit scales and radius scales stay finite. */
+static void test_scales(void)
+{
+	int w = 9, h = 9;
+	synth *s = synth_new(w, h);
+	synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
+	synth_noise(s, 0, 1, 3);
+	double unit_scales[] = {1e-30, 1e-3, 1, 1e30};
+	float radius_scales[] = {0.0f, 1e-30f, 1.0f, 1e30f};
+	for (int a = 0; a < 4; a++)
+		for (int b = 0; b < 4; b++) {
+			sss_material m;
+			sss_material_default(&m, SSS_PROFILE_GAUSSIANS);
+			m.pass_index = 1;
+			sss_options o;
+			sss_options_default(&o);
+			o.radius_scale = radius_scales[b];
+			sss_camera cam;
+			sss_camera_default(&cam);
+			cam.unit_scale = unit_scales[a];
+			sss_passes p = synth_passes(s);
+			float light[3 * 81];
+			sss_image ol = {light, w, h, 3, 0};
+			sss_result r = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol, NULL, 0);
+			int ok = r == SSS_OK;
+			for (int i = 0; i < 3 * 81; i++)
+				ok &= isfinite(light[i]) && light[i] >= 0 && light[i] <= 1;
+			char id[64];
+			snprintf(id, sizeof id, "scale-unit=%g/radius=%g", unit_scales[a],
+			         (double)radius_scales[b]);
+			CHECK(id, ok, "bad output (%s)", sss_status_name(r));
+		}
+	synth_free(s);
+}
+
+int main(void)
+{
+	int cases = 0;
+	for (size_t a = 0; a < sizeof shapes / sizeof *shapes; a++)
+		for (size_t b = 0; b < sizeof poisons / sizeof *poisons; b++)
+			for (size_t c = 0; c < sizeof radii / sizeof *radii; c++)
+				for (size_t d = 0; d < sizeof taps / sizeof *taps; d++)
+					for (size_t e = 0; e < 2; e++)
+						run_case(&shapes[a], &poisons[b], radii[c], taps[d],
+						         methods[e], (int)(c % 2), &cases);
+	printf("report: %d extreme cases\n", cases);
+	test_constant_extremes();
+	test_scales();
+	return tu_finish("test_extremes");
+}
