@@ -1,7 +1,9 @@
 # libsss - screen-space subsurface scattering for Blender render passes.
 #
 #   make          build build/libsss.so
-#   make test     install missing build packages (as root), build, run every test
+#   make test     install missing packages (as root), build, run every test:
+#                 C tests, the sss command on real Blender renders (pytest),
+#                 then the C tests again under ASan + UBSan
 #   make check    the C tests again under ASan + UBSan with -Werror
 #   make demo     render a small synthetic scene with SSS and write a PNG
 #   make clean
@@ -16,43 +18,61 @@ WARN    := -std=c11 -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes \
            -Wmissing-prototypes
 BASE    := $(WARN) -fPIC -fvisibility=hidden -ffp-contract=off \
            -D_POSIX_C_SOURCE=200809L -pthread
-LDLIBS  := -lm -pthread
+# OpenEXR's C API (OpenEXRCore) and cJSON, both from Debian.
+EXR_INC := $(shell pkg-config --cflags-only-I OpenEXR 2>/dev/null || echo -I/usr/include/OpenEXR)
+LIB_INC := $(EXR_INC) -I/usr/include/cjson
+LDLIBS  := -lOpenEXRCore -lcjson -lm -pthread
 
-LIB_SRC   := $(sort $(wildcard csrc/sss_*.c))
+LIB_SRC   := $(sort $(filter-out csrc/sss_main.c,$(wildcard csrc/sss_*.c)))
 LIB_HDR   := csrc/sss.h csrc/sss_internal.h
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 
 .PHONY: all deps test check demo report clean
 
-all: $(BUILD)/libsss.so
+all: $(BUILD)/libsss.so $(BUILD)/sss
 
 $(BUILD)/libsss.so: $(LIB_SRC) $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) -shared -o $@ $(LIB_SRC) $(LDLIBS)
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -shared -o $@ $(LIB_SRC) $(LDLIBS)
+
+# The command links the library's objects in, so it runs from anywhere.
+$(BUILD)/sss: csrc/sss_main.c $(LIB_SRC) $(LIB_HDR) Makefile
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -o $@ csrc/sss_main.c $(LIB_SRC) $(LDLIBS)
 
 # Tests link the library's objects statically so that they can also reach
 # internal helpers; the shared library is what ships and what nm checks.
 $(BUILD)/tests/%: tests/%.c tests/test_util.h tests/synth.h $(LIB_SRC) $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) -Icsrc -o $@ $< $(LIB_SRC) $(LDLIBS)
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -Icsrc -o $@ $< $(LIB_SRC) $(LDLIBS)
 
 deps:
 	@sh scripts/install-deps.sh
 
+# Debian's interpreter: it has numpy, pytest and OpenImageIO (the first
+# python3 on PATH may be another one without them).
+PYTHON ?= /usr/bin/python3
+
 test: deps all $(TESTS)
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
+	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
 	@if sh scripts/sanitizers-supported.sh "$(CC)"; then \
 		$(MAKE) --no-print-directory check; \
 	else echo "make check: skipped ($(CC) cannot build with ASan+UBSan here)"; fi
 
-# Sanitizer build: every C test again with ASan + UBSan, warnings as errors.
+# Sanitizer build: every C test and the command's tests again with ASan +
+# UBSan, warnings as errors.
 SAN := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer \
        -fno-sanitize-recover=all -Werror
 check:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/check CFLAGS="$(SAN)" \
-		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS)) $(BUILD)/check/libsss.so
-	@ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS)) $(BUILD)/check/libsss.so \
+		$(BUILD)/check/sss
+	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
+		SSS_BUILD=$(abspath $(BUILD))/check $(PYTHON) -m pytest -q \
+		-p no:cacheprovider tests/python
+	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
 		sh tests/run_c_tests.sh $(BUILD)/check \
 		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS))
 

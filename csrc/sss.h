@@ -193,7 +193,7 @@ typedef struct sss_material {
 	int32_t gaussian_count;                     /* 1..SSS_MAX_GAUSSIANS */
 	float gaussian_variance[SSS_MAX_GAUSSIANS]; /* mm^2, > 0 */
 	float gaussian_weight[SSS_MAX_GAUSSIANS][3];/* >= 0, any sum > 0 */
-	float gaussian_scale;                       /* > 0, multiplies radii */
+	float gaussian_scale;                       /* >= 0, multiplies radii */
 
 	/* SSS_PROFILE_JIMENEZ (Jimenez et al. 2012 separable kernel) */
 	float jimenez_width;       /* metres: world span of 3 kernel units */
@@ -280,6 +280,114 @@ SSS_API sss_result sss_apply(const sss_passes *passes, const sss_camera *cam,
                              const sss_image *out_combined,
                              const sss_image *out_diffuse_light,
                              char *errbuf, size_t errbuf_len);
+
+
+/* ------------------------------------------------------------ EXR files
+ * (sss_exr.c, through the OpenEXR C API). An sss_exr holds one image part
+ * decoded to float, grouped into passes: channel "ViewLayer.DiffDir.R"
+ * is component R of pass "DiffDir" in layer "ViewLayer" (render output
+ * naming); "DiffDir.R" has layer "" (File Output node naming); a channel
+ * without a dot ("R") belongs to pass "" of layer "". A pass's components
+ * are interleaved in canonical order (R G B A, X Y Z W, U V, then the rest
+ * alphabetically), whatever order the file stores them in. */
+
+typedef struct sss_exr sss_exr;
+
+enum sss_exr_compression { /* values are OpenEXR's */
+	SSS_EXR_NONE = 0, SSS_EXR_RLE = 1, SSS_EXR_ZIPS = 2, SSS_EXR_ZIP = 3,
+	SSS_EXR_PIZ = 4, SSS_EXR_PXR24 = 5, SSS_EXR_B44 = 6, SSS_EXR_B44A = 7,
+	SSS_EXR_DWAA = 8, SSS_EXR_DWAB = 9
+};
+
+typedef struct sss_exr_options {
+	uint32_t struct_size;
+	int32_t max_width;    /* reading: larger data windows are refused */
+	int32_t max_height;   /* (default 32768 each) */
+	int64_t max_pixels;   /* reading: width x height cap (default 2^28) */
+	int32_t compression;  /* writing: sss_exr_compression (default ZIP);
+	                         DWAA/DWAB are not available with OpenEXR 3.1 */
+	int32_t num_threads;  /* chunks decoded/encoded in parallel; 0 = all
+	                         cores; output identical for any count */
+} sss_exr_options;
+
+SSS_API void sss_exr_options_default(sss_exr_options *opt);
+
+/* Reads the first part of a scanline or tiled EXR (level 0), half, float
+ * or uint channels (converted to float), any compression OpenEXR 3.1's C
+ * API decodes (all but DWAA/DWAB: SSS_ERR_UNSUPPORTED). Errors name the
+ * file and what is wrong (missing, truncated, corrupt, too large, deep). */
+SSS_API sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
+                                sss_exr **out, char *errbuf,
+                                size_t errbuf_len);
+SSS_API void sss_exr_free(sss_exr *exr); /* NULL is fine */
+
+SSS_API int32_t sss_exr_width(const sss_exr *exr);
+SSS_API int32_t sss_exr_height(const sss_exr *exr);
+SSS_API int32_t sss_exr_pass_count(const sss_exr *exr);
+/* Pass i's layer ("" if none), pass name and component letters
+ * ("RGB", "Z", ...; comma-joined if any component name is longer than one
+ * letter) and a view of its pixels (channels = components). Views stay
+ * valid until their pass is replaced or the image is freed. */
+SSS_API sss_result sss_exr_pass(const sss_exr *exr, int32_t i,
+                                const char **layer, const char **pass,
+                                const char **components, sss_image *view);
+/* The pass with this layer and name (NULL means ""), or
+ * SSS_ERR_MISSING_PASS. */
+SSS_API sss_result sss_exr_find(const sss_exr *exr, const char *layer,
+                                const char *pass, sss_image *view);
+
+/* Fills the render passes libsss reads from a layer. layer NULL picks the
+ * first layer (in file order) that has a DiffDir pass; *layer_used (if
+ * given) says which, valid while exr lives. Missing required passes are
+ * SSS_ERR_MISSING_PASS with the file's layers named in errbuf. */
+SSS_API sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
+                                         sss_passes *passes,
+                                         const char **layer_used,
+                                         char *errbuf, size_t errbuf_len);
+
+/* Adds (or replaces) a float pass, copying `data` (width x height x
+ * strlen(components) floats, interleaved, packed). */
+SSS_API sss_result sss_exr_add_pass(sss_exr *exr, const char *layer,
+                                    const char *pass, const char *components,
+                                    const float *data, char *errbuf,
+                                    size_t errbuf_len);
+
+/* Writes every pass as one single-part scanline file (original channels
+ * keep their pixel type, so a round trip is lossless with NONE, RLE, ZIPS,
+ * ZIP and PIZ) plus the input's header attributes, to a temporary file
+ * beside `path` that is renamed over `path` only once complete. Refuses to
+ * write over the file the image was read from (by name, link or inode). */
+SSS_API sss_result sss_exr_write(const sss_exr *exr, const char *path,
+                                 const sss_exr_options *opt, char *errbuf,
+                                 size_t errbuf_len);
+
+/* ---------------------------------------------------- scene description
+ * (sss_scene.c). A JSON file that the add-on writes and a farm can write
+ * by hand: camera, unit scale, method and quality, and the per-material
+ * table; see docs/scene.md. */
+
+typedef struct sss_scene sss_scene;
+
+/* Parses JSON text. Unknown keys are warnings (one line each, appended to
+ * warnbuf); wrong types, bad values and unknown names are errors naming
+ * the key path, e.g. "materials[1].radius: expected an array of 3
+ * numbers". */
+SSS_API sss_result sss_scene_parse(const char *json, size_t json_len,
+                                   sss_scene **out, char *warnbuf,
+                                   size_t warnbuf_len, char *errbuf,
+                                   size_t errbuf_len);
+/* The same from a file; errors name the file. */
+SSS_API sss_result sss_scene_load(const char *path, sss_scene **out,
+                                  char *warnbuf, size_t warnbuf_len,
+                                  char *errbuf, size_t errbuf_len);
+SSS_API void sss_scene_free(sss_scene *scene); /* NULL is fine */
+
+SSS_API const sss_camera *sss_scene_camera(const sss_scene *scene);
+SSS_API const sss_options *sss_scene_options(const sss_scene *scene);
+SSS_API const sss_material *sss_scene_materials(const sss_scene *scene,
+                                                int32_t *count);
+SSS_API const char *sss_scene_material_name(const sss_scene *scene,
+                                            int32_t i);
 
 #ifdef __cplusplus
 }

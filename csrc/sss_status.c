@@ -111,6 +111,7 @@ size_t sss_struct_size(const char *name)
 		{"sss_camera", sizeof(sss_camera)},
 		{"sss_material", sizeof(sss_material)},
 		{"sss_options", sizeof(sss_options)},
+		{"sss_exr_options", sizeof(sss_exr_options)},
 	};
 	if (!name)
 		return 0;

@@ -2,7 +2,11 @@
 # Installs the Debian packages the build and tests need, when they are
 # missing and we are root; otherwise says what to install. Idempotent.
 set -u
-PACKAGES="gcc make libc6-dev libpng-dev pkg-config binutils"
+# Build: compiler, OpenEXR's C API, cJSON, libpng (demo). Tests: Blender
+# renders real scenes; Debian's python3 with numpy, pytest and OpenImageIO
+# checks the results independently of the code under test.
+PACKAGES="gcc make libc6-dev pkg-config binutils libpng-dev libopenexr-dev
+libcjson-dev blender python3 python3-numpy python3-pytest python3-openimageio"
 missing=""
 for p in $PACKAGES; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" \

@@ -1,0 +1,1585 @@
+/* sss_exr.c - multilayer EXR files through OpenEXR's C API (OpenEXRCore):
+ * channels decoded straight into float passes, written back losslessly
+ * through a temporary file. The only file of libsss that sees openexr.h. */
+#include "sss_internal.h"
+
+#include <openexr.h>
+
+#include <errno.h>
+#include <fcntl.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <time.h>
+#include <unistd.h>
+
+#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
+
+/* EXR allows 255-byte names once long names are switched on. */
+#define MAX_NAME 255
+#define SHORT_NAME 31
+
+/* ---------------------------------------------------------------- types */
+
+typedef struct xchan {
+	char *name;       /* full channel name, as in the file (or rebuilt) */
+	const char *comp; /* the component: name after its last dot */
+	int32_t type;     /* exr_pixel_type_t on disk, restored on writing */
+	uint8_t p_linear; /* perceptual hint, kept for lossy codecs */
+	int32_t index;    /* position in the source channel list; -1: added */
+} xchan;
+
+typedef struct xpass {
+	char *layer, *pass;
+	char *components; /* "RGB"; names joined by ',' if one is not 1 char */
+	int32_t count;    /* components, in canonical order */
+	xchan *chan;
+	float *data;      /* width x height x count floats, interleaved */
+} xpass;
+
+/* One context's file and error detail. OpenEXRCore hands it back to our
+ * read/write callbacks and (read contexts) to the error handler through
+ * user_data, so there is no global state and nothing is printed. */
+typedef struct xio {
+	int fd;
+	int64_t size;           /* file size, lets the library reject offsets */
+	int quiet;              /* set once decoded: later messages dropped */
+	pthread_mutex_t lock;   /* decoding threads report concurrently */
+	char msg[256];          /* the first detail message */
+} xio;
+
+struct sss_exr {
+	int32_t width, height;
+	exr_attr_box2i_t data_window, display_window;
+	float pixel_aspect, screen_width;
+	exr_attr_v2f_t screen_center;
+	char *path;             /* as given, for messages */
+	dev_t dev;              /* identity of the source file: never */
+	ino_t ino;              /* written over */
+	int32_t pass_count, pass_cap;
+	xpass *passes;
+	exr_context_t header;   /* the source header, kept for its metadata */
+	xio io;                 /* header's callbacks' state (quiet by now) */
+};
+
+/* --------------------------------------------------------- I/O, errors */
+
+static void xio_init(xio *io, int fd)
+{
+	memset(io, 0, sizeof *io);
+	io->fd = fd;
+	pthread_mutex_init(&io->lock, NULL);
+}
+
+static void xio_note(xio *io, const char *msg)
+{
+	pthread_mutex_lock(&io->lock);
+	if (!io->quiet && !io->msg[0] && msg)
+		snprintf(io->msg, sizeof io->msg, "%s", msg);
+	pthread_mutex_unlock(&io->lock);
+}
+
+/* Read contexts only: exr_get_user_data locks a write context, and the
+ * library may report while holding that lock. */
+static void on_read_error(exr_const_context_t ctxt, exr_result_t code,
+                          const char *msg)
+{
+	void *ud = NULL;
+	(void)code;
+	if (ctxt && exr_get_user_data(ctxt, &ud) == EXR_ERR_SUCCESS && ud)
+		xio_note(ud, msg);
+}
+
+/* Write contexts: silent; our write callback records I/O errors itself,
+ * and everything else the library could say there is our own misuse. */
+static void on_write_error(exr_const_context_t ctxt, exr_result_t code,
+                           const char *msg)
+{
+	(void)ctxt;
+	(void)code;
+	(void)msg;
+}
+
+static int64_t io_read(exr_const_context_t ctxt, void *ud, void *buffer,
+                       uint64_t sz, uint64_t offset,
+                       exr_stream_error_func_ptr_t error_cb)
+{
+	xio *io = ud;
+	uint8_t *p = buffer;
+	uint64_t done = 0;
+	if (io->fd < 0 || offset > (uint64_t)INT64_MAX - sz) {
+		if (error_cb)
+			error_cb(ctxt, EXR_ERR_READ_IO, "read outside the file");
+		return -1;
+	}
+	while (done < sz) {
+		uint64_t left = sz - done;
+		ssize_t n = pread(io->fd, p + done,
+		                  (size_t)(left > (1u << 30) ? (1u << 30) : left),
+		                  (off_t)(offset + done));
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n < 0) {
+			if (error_cb)
+				error_cb(ctxt, EXR_ERR_READ_IO, "read error: %s",
+				         strerror(errno));
+			return -1;
+		}
+		if (n == 0)
+			break; /* end of file: the library reports the short read */
+		done += (uint64_t)n;
+	}
+	return (int64_t)done;
+}
+
+static int64_t io_size(exr_const_context_t ctxt, void *ud)
+{
+	(void)ctxt;
+	return ((xio *)ud)->size;
+}
+
+static int64_t io_write(exr_const_context_t ctxt, void *ud, const void *buffer,
+                        uint64_t sz, uint64_t offset,
+                        exr_stream_error_func_ptr_t error_cb)
+{
+	xio *io = ud;
+	const uint8_t *p = buffer;
+	uint64_t done = 0;
+	(void)error_cb;
+	(void)ctxt;
+	while (done < sz) {
+		uint64_t left = sz - done;
+		ssize_t n = pwrite(io->fd, p + done,
+		                   (size_t)(left > (1u << 30) ? (1u << 30) : left),
+		                   (off_t)(offset + done));
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n <= 0) {
+			char m[128];
+			snprintf(m, sizeof m, "write error: %s",
+			         n < 0 ? strerror(errno) : "no progress");
+			xio_note(io, m);
+			return -1;
+		}
+		done += (uint64_t)n;
+	}
+	return (int64_t)done;
+}
+
+/* "PATH: WHAT: <library's sentence> (<its detail>)". What the library
+ * has not implemented (OpenEXRCore 3.1 neither decodes nor encodes DWAA
+ * and DWAB) is SSS_ERR_UNSUPPORTED and names the library's version. */
+static sss_result exr_fail(char *errbuf, size_t errbuf_len, const char *path,
+                           const char *what, exr_result_t rv, xio *io)
+{
+	char detail[256], version[64] = "";
+	pthread_mutex_lock(&io->lock);
+	memcpy(detail, io->msg, sizeof detail);
+	pthread_mutex_unlock(&io->lock);
+	sss_result code = SSS_ERR_EXR;
+	if (rv == EXR_ERR_OUT_OF_MEMORY)
+		code = SSS_ERR_OUT_OF_MEMORY;
+	if (rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
+		int maj = 0, min = 0, patch = 0;
+		const char *extra = NULL;
+		exr_get_library_version(&maj, &min, &patch, &extra);
+		snprintf(version, sizeof version, " [OpenEXRCore %d.%d.%d]", maj,
+		         min, patch);
+		code = SSS_ERR_UNSUPPORTED;
+	}
+	return FAILX(code, "%s: %s: %s%s%s%s%s", path, what,
+	             exr_get_default_error_message(rv), detail[0] ? " (" : "",
+	             detail, detail[0] ? ")" : "", version);
+}
+
+/* -------------------------------------------------------------- options */
+
+void sss_exr_options_default(sss_exr_options *opt)
+{
+	if (!opt)
+		return;
+	memset(opt, 0, sizeof *opt);
+	opt->struct_size = sizeof *opt;
+	opt->max_width = 32768;
+	opt->max_height = 32768;
+	opt->max_pixels = (int64_t)1 << 28;
+	opt->compression = SSS_EXR_ZIP;
+	opt->num_threads = 0;
+}
+
+static sss_result get_options(const sss_exr_options *user, sss_exr_options *o,
+                              char *errbuf, size_t errbuf_len)
+{
+	sss_exr_options_default(o);
+	if (!user)
+		return SSS_OK;
+	if (user->struct_size != sizeof *user)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: struct_size "
+		             "%u, expected %zu (use sss_exr_options_default)",
+		             user->struct_size, sizeof *user);
+	*o = *user;
+	if (o->max_width < 1 || o->max_height < 1 || o->max_pixels < 1)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: max_width %d, "
+		             "max_height %d and max_pixels %lld must be >= 1",
+		             o->max_width, o->max_height, (long long)o->max_pixels);
+	if (o->compression < SSS_EXR_NONE || o->compression > SSS_EXR_DWAB)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: unknown "
+		             "compression %d", o->compression);
+	if (o->num_threads < 0 || o->num_threads > 256)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: num_threads "
+		             "%d must be 0 (all cores) .. 256", o->num_threads);
+	return SSS_OK;
+}
+
+/* --------------------------------------------------------------- passes */
+
+/* Canonical component order: R G B A X Y Z W U V, then by name. */
+static int comp_rank(const char *c)
+{
+	static const char order[] = "RGBAXYZWUV";
+	const char *p = c[0] && !c[1] ? strchr(order, c[0]) : NULL;
+	return p ? (int)(p - order) : 10;
+}
+
+static int comp_cmp(const char *a, const char *b)
+{
+	int ra = comp_rank(a), rb = comp_rank(b);
+	if (ra != rb)
+		return ra < rb ? -1 : 1;
+	return ra == 10 ? strcmp(a, b) : 0;
+}
+
+static char *dup_n(const char *s, size_t n)
+{
+	char *d = malloc(n + 1);
+	if (d) {
+		memcpy(d, s, n);
+		d[n] = '\0';
+	}
+	return d;
+}
+
+static void pass_free(xpass *p)
+{
+	for (int32_t k = 0; k < p->count; k++)
+		free(p->chan[k].name);
+	free(p->chan);
+	free(p->components);
+	free(p->data);
+	p->chan = NULL;
+	p->components = NULL;
+	p->data = NULL;
+	p->count = 0;
+}
+
+void sss_exr_free(sss_exr *exr)
+{
+	if (!exr)
+		return;
+	for (int32_t i = 0; i < exr->pass_count; i++) {
+		pass_free(&exr->passes[i]);
+		free(exr->passes[i].layer);
+		free(exr->passes[i].pass);
+	}
+	free(exr->passes);
+	if (exr->header)
+		exr_finish(&exr->header);
+	pthread_mutex_destroy(&exr->io.lock);
+	free(exr->path);
+	free(exr);
+}
+
+static xpass *find_pass(const sss_exr *exr, const char *layer,
+                        const char *pass)
+{
+	for (int32_t i = 0; i < exr->pass_count; i++)
+		if (strcmp(exr->passes[i].layer, layer) == 0 &&
+		    strcmp(exr->passes[i].pass, pass) == 0)
+			return &exr->passes[i];
+	return NULL;
+}
+
+/* A new, empty pass at the end (names copied); NULL when out of memory. */
+static xpass *append_pass(sss_exr *exr, const char *layer, size_t layer_len,
+                          const char *pass, size_t pass_len)
+{
+	if (exr->pass_count == exr->pass_cap) {
+		int32_t cap = exr->pass_cap ? 2 * exr->pass_cap : 16;
+		xpass *grown = realloc(exr->passes, (size_t)cap * sizeof *grown);
+		if (!grown)
+			return NULL;
+		exr->passes = grown;
+		exr->pass_cap = cap;
+	}
+	xpass *p = &exr->passes[exr->pass_count];
+	memset(p, 0, sizeof *p);
+	p->layer = dup_n(layer, layer_len);
+	p->pass = dup_n(pass, pass_len);
+	if (!p->layer || !p->pass) {
+		free(p->layer);
+		free(p->pass);
+		return NULL;
+	}
+	exr->pass_count++;
+	return p;
+}
+
+/* The API's component string: "RGB", or "red,green" for longer names. */
+static int make_components(xpass *p)
+{
+	size_t len = 1;
+	int single = 1;
+	for (int32_t k = 0; k < p->count; k++) {
+		len += strlen(p->chan[k].comp) + 1;
+		if (strlen(p->chan[k].comp) != 1)
+			single = 0;
+	}
+	free(p->components);
+	p->components = malloc(len);
+	if (!p->components)
+		return -1;
+	char *o = p->components;
+	for (int32_t k = 0; k < p->count; k++) {
+		if (!single && k > 0)
+			*o++ = ',';
+		size_t n = strlen(p->chan[k].comp);
+		memcpy(o, p->chan[k].comp, n);
+		o += n;
+	}
+	*o = '\0';
+	return 0;
+}
+
+/* Splits a channel name: component after the last dot; before it, layer
+ * up to the first dot and the pass, or (no second dot) just the pass. */
+static void split_name(const char *name, const char **layer, size_t *layer_len,
+                       const char **pass, size_t *pass_len, const char **comp)
+{
+	const char *last = strrchr(name, '.');
+	*layer = *pass = "";
+	*layer_len = *pass_len = 0;
+	if (!last) {
+		*comp = name;
+		return;
+	}
+	*comp = last + 1;
+	const char *first = memchr(name, '.', (size_t)(last - name));
+	if (first) {
+		*layer = name;
+		*layer_len = (size_t)(first - name);
+		*pass = first + 1;
+		*pass_len = (size_t)(last - first - 1);
+	} else {
+		*pass = name;
+		*pass_len = (size_t)(last - name);
+	}
+}
+
+/* Groups the source's channels into passes (in channel-list order),
+ * components sorted canonically. Pixel buffers are allocated later. */
+static sss_result group_channels(sss_exr *exr, const exr_attr_chlist_t *cl,
+                                 char *errbuf, size_t errbuf_len)
+{
+	for (int i = 0; i < cl->num_channels; i++) {
+		const exr_attr_chlist_entry_t *e = &cl->entries[i];
+		const char *name = e->name.str;
+		if (e->x_sampling != 1 || e->y_sampling != 1)
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: channel '%s' is "
+			             "subsampled (%dx%d); only full-resolution channels "
+			             "are supported", exr->path, name, e->x_sampling,
+			             e->y_sampling);
+		if (e->pixel_type != EXR_PIXEL_UINT &&
+		    e->pixel_type != EXR_PIXEL_HALF &&
+		    e->pixel_type != EXR_PIXEL_FLOAT)
+			return FAILX(SSS_ERR_EXR, "%s: channel '%s' has unknown pixel "
+			             "type %d", exr->path, name, (int)e->pixel_type);
+		const char *layer, *pass, *comp;
+		size_t layer_len, pass_len;
+		split_name(name, &layer, &layer_len, &pass, &pass_len, &comp);
+
+		xpass *p = NULL;
+		for (int32_t j = 0; j < exr->pass_count && !p; j++) {
+			xpass *q = &exr->passes[j];
+			if (strlen(q->layer) == layer_len &&
+			    memcmp(q->layer, layer, layer_len) == 0 &&
+			    strlen(q->pass) == pass_len &&
+			    memcmp(q->pass, pass, pass_len) == 0)
+				p = q;
+		}
+		if (!p && !(p = append_pass(exr, layer, layer_len, pass, pass_len)))
+			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory",
+			             exr->path);
+
+		/* Insertion in canonical order; names map to (layer, pass,
+		 * component) one way only except for odd leading dots, so a
+		 * clash is refused rather than one channel silently lost. */
+		int32_t at = p->count;
+		while (at > 0 && comp_cmp(comp, p->chan[at - 1].comp) < 0)
+			at--;
+		if (at > 0 && comp_cmp(comp, p->chan[at - 1].comp) == 0)
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: channels '%s' and '%s' "
+			             "are the same component of one pass", exr->path,
+			             p->chan[at - 1].name, name);
+		xchan *grown = realloc(p->chan, (size_t)(p->count + 1) *
+		                                sizeof *grown);
+		char *copy = dup_n(name, strlen(name));
+		if (grown)
+			p->chan = grown;
+		if (!grown || !copy) {
+			free(copy);
+			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory",
+			             exr->path);
+		}
+		memmove(&p->chan[at + 1], &p->chan[at],
+		        (size_t)(p->count - at) * sizeof *p->chan);
+		p->chan[at] = (xchan){copy, copy + (comp - name),
+		                      (int32_t)e->pixel_type, e->p_linear, i};
+		p->count++;
+	}
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		if (make_components(&exr->passes[j]))
+			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory",
+			             exr->path);
+	return SSS_OK;
+}
+
+/* ------------------------------------------------------------- decoding */
+
+/* Where one source channel lands: its pass's buffer and component. */
+typedef struct chan_ref {
+	float *data;
+	int32_t count, k;
+} chan_ref;
+
+typedef struct read_job {
+	exr_context_t ctxt;
+	const sss_exr *exr;
+	const chan_ref *ref;     /* per source channel */
+	int tiled;
+	int32_t lines;           /* scanlines per chunk */
+	int32_t tile_w, tile_h, tiles_x;
+	xio *io;
+	exr_result_t rv;         /* first failure (under io->lock) */
+	int32_t bad_x, bad_y;    /* its chunk, in pixels from the data window */
+} read_job;
+
+static int job_failed(read_job *job)
+{
+	pthread_mutex_lock(&job->io->lock);
+	int failed = job->rv != EXR_ERR_SUCCESS;
+	pthread_mutex_unlock(&job->io->lock);
+	return failed;
+}
+
+static void job_fail(read_job *job, exr_result_t rv, int32_t x, int32_t y)
+{
+	pthread_mutex_lock(&job->io->lock);
+	if (job->rv == EXR_ERR_SUCCESS) {
+		job->rv = rv;
+		job->bad_x = x;
+		job->bad_y = y;
+	}
+	pthread_mutex_unlock(&job->io->lock);
+}
+
+/* Chunk i's info and its top-left pixel relative to the data window. */
+static exr_result_t chunk_at(const read_job *job, int32_t i,
+                             exr_chunk_info_t *ci, int32_t *x0, int32_t *y0)
+{
+	const sss_exr *exr = job->exr;
+	exr_result_t rv;
+	if (job->tiled) {
+		int32_t tx = i % job->tiles_x, ty = i / job->tiles_x;
+		*x0 = tx * job->tile_w;
+		*y0 = ty * job->tile_h;
+		rv = exr_read_tile_chunk_info(job->ctxt, 0, tx, ty, 0, 0, ci);
+	} else {
+		*x0 = 0;
+		*y0 = i * job->lines;
+		rv = exr_read_scanline_chunk_info(
+			job->ctxt, 0, exr->data_window.min.y + *y0, ci);
+		if (rv == EXR_ERR_SUCCESS)
+			*y0 = ci->start_y - exr->data_window.min.y;
+	}
+	/* The buffers are ours: never trust a chunk to stay inside them. */
+	if (rv == EXR_ERR_SUCCESS &&
+	    (*y0 < 0 || *x0 < 0 || ci->width < 0 || ci->height < 0 ||
+	     ci->width > exr->width - *x0 || ci->height > exr->height - *y0))
+		rv = EXR_ERR_CORRUPT_CHUNK;
+	return rv;
+}
+
+/* Every channel of the chunk at (x0, y0) straight to its place in its
+ * pass: interleaved floats, halves and uints converted on the way. */
+static void point_channels(const read_job *job, exr_decode_pipeline_t *dec,
+                           int32_t x0, int32_t y0)
+{
+	const sss_exr *exr = job->exr;
+	for (int c = 0; c < dec->channel_count; c++) {
+		exr_coding_channel_info_t *ch = &dec->channels[c];
+		const chan_ref *r = &job->ref[c];
+		size_t at = ((size_t)y0 * (size_t)exr->width + (size_t)x0) *
+		            (size_t)r->count + (size_t)r->k;
+		ch->decode_to_ptr = (uint8_t *)(r->data + at);
+		ch->user_pixel_stride = r->count * (int32_t)sizeof(float);
+		ch->user_line_stride = exr->width * r->count * (int32_t)sizeof(float);
+		ch->user_bytes_per_element = (int16_t)sizeof(float);
+		ch->user_data_type = EXR_PIXEL_FLOAT;
+	}
+}
+
+/* Decodes chunks [c0, c1) with one pipeline; every channel goes straight
+ * to its place in its pass (interleaved), halves and uints converted. */
+static void decode_chunks(void *arg, int32_t c0, int32_t c1)
+{
+	read_job *job = arg;
+	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+	int started = 0;
+	for (int32_t i = c0; i < c1 && !job_failed(job); i++) {
+		exr_chunk_info_t ci;
+		int32_t x0 = 0, y0 = 0;
+		exr_result_t rv = chunk_at(job, i, &ci, &x0, &y0);
+		if (rv == EXR_ERR_SUCCESS) {
+			rv = started ? exr_decoding_update(job->ctxt, 0, &ci, &dec)
+			             : exr_decoding_initialize(job->ctxt, 0, &ci, &dec);
+			started = 1;
+		}
+		if (rv == EXR_ERR_SUCCESS && !dec.read_fn) {
+			/* OpenEXRCore 3.1's fast path for 4 halves interleaved in
+			 * reverse (a file's A B G R into our R G B A floats) writes
+			 * them in the wrong order. The routine is picked from the
+			 * pointers alone, so it is chosen with the channels pointing
+			 * at one place (no interleave: a general routine, which
+			 * reads the real pointers and strides on every run). */
+			point_channels(job, &dec, x0, y0);
+			for (int c = 1; c < dec.channel_count; c++)
+				dec.channels[c].decode_to_ptr =
+					dec.channels[0].decode_to_ptr;
+			rv = exr_decoding_choose_default_routines(job->ctxt, 0, &dec);
+		}
+		if (rv == EXR_ERR_SUCCESS)
+			point_channels(job, &dec, x0, y0);
+		if (rv == EXR_ERR_SUCCESS)
+			rv = exr_decoding_run(job->ctxt, 0, &dec);
+		if (rv != EXR_ERR_SUCCESS)
+			job_fail(job, rv, x0, y0);
+	}
+	if (started)
+		exr_decoding_destroy(job->ctxt, &dec);
+}
+
+/* decode_chunks over chunks 1.. (chunk 0 is decoded first, alone). */
+static void decode_rest(void *arg, int32_t c0, int32_t c1)
+{
+	decode_chunks(arg, c0 + 1, c1 + 1);
+}
+
+/* Opens a read context on io's file; library size limits as given. */
+static exr_result_t start_read(exr_context_t *ctxt, const char *path, xio *io,
+                               int max_w, int max_h)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	init.error_handler_fn = on_read_error;
+	init.user_data = io;
+	init.read_fn = io_read;
+	init.size_fn = io_size;
+	init.max_image_width = max_w;
+	init.max_image_height = max_h;
+	return exr_start_read(ctxt, path, &init);
+}
+
+/* exr_start_read refused the header. If only because of our size limits,
+ * say so (SSS_ERR_INVALID_ARGUMENT), by parsing it again without them. */
+static int too_large(const char *path, xio *io, const sss_exr_options *o,
+                     char *errbuf, size_t errbuf_len)
+{
+	exr_context_t c = NULL;
+	exr_attr_box2i_t dw;
+	int hit = 0;
+	pthread_mutex_lock(&io->lock);
+	io->quiet = 1;
+	pthread_mutex_unlock(&io->lock);
+	if (start_read(&c, path, io, 0, 0) == EXR_ERR_SUCCESS &&
+	    exr_get_data_window(c, 0, &dw) == EXR_ERR_SUCCESS) {
+		long long w = (long long)dw.max.x - dw.min.x + 1;
+		long long h = (long long)dw.max.y - dw.min.y + 1;
+		if (w > o->max_width || h > o->max_height) {
+			FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: data window %lldx%lld "
+			      "exceeds the %dx%d limit", path, w, h, o->max_width,
+			      o->max_height);
+			hit = 1;
+		}
+	}
+	if (c)
+		exr_finish(&c);
+	pthread_mutex_lock(&io->lock);
+	io->quiet = 0;
+	pthread_mutex_unlock(&io->lock);
+	return hit;
+}
+
+static sss_result read_header(sss_exr *exr, const sss_exr_options *o,
+                              const exr_attr_chlist_t **chlist, char *errbuf,
+                              size_t errbuf_len)
+{
+	exr_context_t c = exr->header;
+	const char *path = exr->path;
+	int parts = 0;
+	exr_storage_t storage;
+	exr_result_t rv = exr_get_count(c, &parts);
+	if (rv == EXR_ERR_SUCCESS && parts < 1)
+		rv = EXR_ERR_FILE_BAD_HEADER;
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_storage(c, 0, &storage);
+	if (rv != EXR_ERR_SUCCESS)
+		return exr_fail(errbuf, errbuf_len, path, "reading the header", rv,
+		                &exr->io);
+	if (storage == EXR_STORAGE_DEEP_SCANLINE ||
+	    storage == EXR_STORAGE_DEEP_TILED)
+		return FAILX(SSS_ERR_UNSUPPORTED, "%s: deep image data is not "
+		             "supported (render without deep output)", path);
+	if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
+		return FAILX(SSS_ERR_EXR, "%s: unknown storage type %d", path,
+		             (int)storage);
+
+	exr_attr_box2i_t dw;
+	if ((rv = exr_get_data_window(c, 0, &dw)) != EXR_ERR_SUCCESS)
+		return exr_fail(errbuf, errbuf_len, path, "reading the data "
+		                "window", rv, &exr->io);
+	/* Sizes checked before anything is allocated. */
+	long long w = (long long)dw.max.x - dw.min.x + 1;
+	long long h = (long long)dw.max.y - dw.min.y + 1;
+	if (w < 1 || h < 1)
+		return FAILX(SSS_ERR_EXR, "%s: empty data window (%d,%d)-(%d,%d)",
+		             path, dw.min.x, dw.min.y, dw.max.x, dw.max.y);
+	if (w > o->max_width || h > o->max_height)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: data window %lldx%lld "
+		             "exceeds the %dx%d limit", path, w, h, o->max_width,
+		             o->max_height);
+	if (w * h > o->max_pixels)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: data window %lldx%lld "
+		             "has %lld pixels, more than the limit of %lld", path, w,
+		             h, w * h, (long long)o->max_pixels);
+	exr->width = (int32_t)w;
+	exr->height = (int32_t)h;
+	exr->data_window = dw;
+
+	/* Kept for writing; a file that lacks them gets the defaults. */
+	exr->display_window = dw;
+	exr->pixel_aspect = 1.0f;
+	exr->screen_width = 1.0f;
+	exr_get_display_window(c, 0, &exr->display_window);
+	exr_get_pixel_aspect_ratio(c, 0, &exr->pixel_aspect);
+	exr_get_screen_window_center(c, 0, &exr->screen_center);
+	exr_get_screen_window_width(c, 0, &exr->screen_width);
+
+	if ((rv = exr_get_channels(c, 0, chlist)) != EXR_ERR_SUCCESS)
+		return exr_fail(errbuf, errbuf_len, path, "reading the channel "
+		                "list", rv, &exr->io);
+	return SSS_OK;
+}
+
+/* Allocates every pass and decodes every chunk of part 0 into them. */
+static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
+                               const exr_attr_chlist_t *cl, char *errbuf,
+                               size_t errbuf_len)
+{
+	exr_context_t c = exr->header;
+	const char *path = exr->path;
+	size_t npix = (size_t)exr->width * (size_t)exr->height;
+	for (int32_t j = 0; j < exr->pass_count; j++) {
+		xpass *p = &exr->passes[j];
+		if ((int64_t)exr->width * p->count * (int64_t)sizeof(float) >
+		    INT32_MAX)
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: pass '%s' has too many "
+			             "components (%d) for its width", path, p->pass,
+			             p->count);
+		if (npix > SIZE_MAX / sizeof(float) / (size_t)p->count ||
+		    !(p->data = calloc(npix * (size_t)p->count, sizeof(float))))
+			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: cannot allocate pass "
+			             "'%s' (%dx%d x %d)", path, p->pass, exr->width,
+			             exr->height, p->count);
+	}
+	if (cl->num_channels == 0)
+		return SSS_OK;
+
+	chan_ref *ref = calloc((size_t)cl->num_channels, sizeof *ref);
+	if (!ref)
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		for (int32_t k = 0; k < exr->passes[j].count; k++)
+			ref[exr->passes[j].chan[k].index] =
+				(chan_ref){exr->passes[j].data, exr->passes[j].count, k};
+
+	read_job job = {.ctxt = c, .exr = exr, .ref = ref, .io = &exr->io};
+	exr_storage_t storage = EXR_STORAGE_SCANLINE;
+	int32_t chunks = 0;
+	exr_result_t rv = exr_get_storage(c, 0, &storage);
+	job.tiled = storage == EXR_STORAGE_TILED;
+	if (rv == EXR_ERR_SUCCESS && job.tiled) {
+		/* Level 0 only: mip/rip levels below it are not needed. */
+		int32_t lw = 0, lh = 0;
+		rv = exr_get_tile_sizes(c, 0, 0, 0, &job.tile_w, &job.tile_h);
+		if (rv == EXR_ERR_SUCCESS)
+			rv = exr_get_level_sizes(c, 0, 0, 0, &lw, &lh);
+		if (rv == EXR_ERR_SUCCESS &&
+		    (job.tile_w < 1 || job.tile_h < 1 || lw != exr->width ||
+		     lh != exr->height))
+			rv = EXR_ERR_FILE_BAD_HEADER;
+		if (rv == EXR_ERR_SUCCESS) {
+			job.tiles_x = (int32_t)(((int64_t)lw + job.tile_w - 1) /
+			                        job.tile_w);
+			chunks = job.tiles_x *
+			         (int32_t)(((int64_t)lh + job.tile_h - 1) / job.tile_h);
+		}
+	} else if (rv == EXR_ERR_SUCCESS) {
+		rv = exr_get_scanlines_per_chunk(c, 0, &job.lines);
+		if (rv == EXR_ERR_SUCCESS && job.lines < 1)
+			rv = EXR_ERR_FILE_BAD_HEADER;
+		if (rv == EXR_ERR_SUCCESS)
+			chunks = (int32_t)(((int64_t)exr->height + job.lines - 1) /
+			                   job.lines);
+	}
+	if (rv != EXR_ERR_SUCCESS) {
+		free(ref);
+		return exr_fail(errbuf, errbuf_len, path, "reading the chunk "
+		                "layout", rv, &exr->io);
+	}
+
+	/* The first chunk on this thread loads the chunk offset table once;
+	 * then the rest in parallel, one pipeline per band of chunks. */
+	decode_chunks(&job, 0, 1);
+	if (job.rv == EXR_ERR_SUCCESS && chunks > 1) {
+		sss__parallel_rows(chunks - 1, o->num_threads, decode_rest, &job);
+	}
+	free(ref);
+	if (job.rv != EXR_ERR_SUCCESS) {
+		char what[128];
+		if (job.tiled)
+			snprintf(what, sizeof what, "truncated or corrupt (the tile at "
+			         "x %d, y %d)", exr->data_window.min.x + job.bad_x,
+			         exr->data_window.min.y + job.bad_y);
+		else
+			snprintf(what, sizeof what, "truncated or corrupt (the "
+			         "scanlines from y %d)",
+			         exr->data_window.min.y + job.bad_y);
+		if (job.rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED)
+			snprintf(what, sizeof what, "decoding the pixels");
+		return exr_fail(errbuf, errbuf_len, path, what, job.rv, &exr->io);
+	}
+	return SSS_OK;
+}
+
+/* ----------------------------------------------------------------- read */
+
+sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
+                        sss_exr **out, char *errbuf, size_t errbuf_len)
+{
+	sss_exr_options o;
+	sss_result r;
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (!out)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_read: out is NULL");
+	*out = NULL;
+	if (!path || !path[0])
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_read: no path");
+	if ((r = get_options(opt, &o, errbuf, errbuf_len)))
+		return r;
+
+	/* Our own descriptor: a missing file is SSS_ERR_IO, and its device
+	 * and inode identify the source for sss_exr_write's refusal. */
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
+		return FAILX(SSS_ERR_IO, "%s: cannot open: %s", path,
+		             strerror(errno));
+	struct stat st;
+	if (fstat(fd, &st)) {
+		int e = errno;
+		close(fd);
+		return FAILX(SSS_ERR_IO, "%s: %s", path, strerror(e));
+	}
+	if (!S_ISREG(st.st_mode)) {
+		close(fd);
+		return FAILX(SSS_ERR_IO, "%s: %s", path, S_ISDIR(st.st_mode)
+		             ? "is a directory" : "is not a regular file");
+	}
+	sss_exr *exr = calloc(1, sizeof *exr);
+	if (!exr || !(exr->path = dup_n(path, strlen(path)))) {
+		free(exr);
+		close(fd);
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+	}
+	xio_init(&exr->io, fd);
+	exr->io.size = (int64_t)st.st_size;
+	exr->dev = st.st_dev;
+	exr->ino = st.st_ino;
+
+	const exr_attr_chlist_t *cl = NULL;
+	exr_result_t rv = start_read(&exr->header, path, &exr->io, o.max_width,
+	                             o.max_height);
+	if (rv != EXR_ERR_SUCCESS) {
+		exr->header = NULL; /* the library has finished it */
+		if (too_large(path, &exr->io, &o, errbuf, errbuf_len))
+			r = SSS_ERR_INVALID_ARGUMENT;
+		else if (st.st_size == 0)
+			r = FAILX(SSS_ERR_EXR, "%s: not an OpenEXR file (it is empty)",
+			          path);
+		else
+			r = exr_fail(errbuf, errbuf_len, path, "not a readable "
+			             "OpenEXR file", rv, &exr->io);
+	} else if (!(r = read_header(exr, &o, &cl, errbuf, errbuf_len)) &&
+	           !(r = group_channels(exr, cl, errbuf, errbuf_len))) {
+		r = decode_image(exr, &o, cl, errbuf, errbuf_len);
+	}
+	/* The header stays in memory for sss_exr_write; the file is done. */
+	close(fd);
+	pthread_mutex_lock(&exr->io.lock);
+	exr->io.fd = -1;
+	exr->io.quiet = 1;
+	pthread_mutex_unlock(&exr->io.lock);
+	if (r) {
+		sss_exr_free(exr);
+		return r;
+	}
+	*out = exr;
+	return SSS_OK;
+}
+
+int32_t sss_exr_width(const sss_exr *exr)
+{
+	return exr ? exr->width : 0;
+}
+
+int32_t sss_exr_height(const sss_exr *exr)
+{
+	return exr ? exr->height : 0;
+}
+
+int32_t sss_exr_pass_count(const sss_exr *exr)
+{
+	return exr ? exr->pass_count : 0;
+}
+
+static sss_image view_of(const sss_exr *exr, const xpass *p, int32_t first)
+{
+	sss_image v = {p->data + first, exr->width, exr->height, p->count, 0};
+	return v;
+}
+
+sss_result sss_exr_pass(const sss_exr *exr, int32_t i, const char **layer,
+                        const char **pass, const char **components,
+                        sss_image *view)
+{
+	if (!exr || i < 0 || i >= exr->pass_count)
+		return SSS_ERR_INVALID_ARGUMENT;
+	const xpass *p = &exr->passes[i];
+	if (layer)
+		*layer = p->layer;
+	if (pass)
+		*pass = p->pass;
+	if (components)
+		*components = p->components;
+	if (view)
+		*view = view_of(exr, p, 0);
+	return SSS_OK;
+}
+
+sss_result sss_exr_find(const sss_exr *exr, const char *layer,
+                        const char *pass, sss_image *view)
+{
+	if (!exr)
+		return SSS_ERR_INVALID_ARGUMENT;
+	const xpass *p = find_pass(exr, layer ? layer : "", pass ? pass : "");
+	if (!p)
+		return SSS_ERR_MISSING_PASS;
+	if (view)
+		*view = view_of(exr, p, 0);
+	return SSS_OK;
+}
+
+/* ------------------------------------------------------- render passes */
+
+/* Index of the run of one-letter components `run` ("RGB") in p, or -1. */
+static int32_t find_run(const xpass *p, const char *run)
+{
+	int32_t n = (int32_t)strlen(run);
+	for (int32_t at = 0; at + n <= p->count; at++) {
+		int32_t j = 0;
+		while (j < n && p->chan[at + j].comp[0] == run[j] &&
+		       p->chan[at + j].comp[1] == '\0')
+			j++;
+		if (j == n)
+			return at;
+	}
+	return -1;
+}
+
+/* Appends printf output to a fixed buffer, truncating quietly. */
+static void append(char *buf, size_t cap, const char *fmt, ...)
+	__attribute__((format(printf, 3, 4)));
+static void append(char *buf, size_t cap, const char *fmt, ...)
+{
+	size_t len = strlen(buf);
+	if (len + 1 >= cap)
+		return;
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(buf + len, cap - len, fmt, ap);
+	va_end(ap);
+}
+
+/* "'ViewLayer' (Combined, DiffDir), 'Other' (Depth)": every layer in file
+ * order with its passes. */
+static void describe_layers(const sss_exr *exr, char *buf, size_t cap)
+{
+	for (int32_t i = 0; i < exr->pass_count; i++) {
+		const char *layer = exr->passes[i].layer;
+		int seen = 0;
+		for (int32_t j = 0; j < i && !seen; j++)
+			seen = strcmp(exr->passes[j].layer, layer) == 0;
+		if (seen)
+			continue;
+		append(buf, cap, "%s'%s' (", buf[0] ? ", " : "", layer);
+		int first = 1;
+		for (int32_t j = i; j < exr->pass_count; j++)
+			if (strcmp(exr->passes[j].layer, layer) == 0) {
+				append(buf, cap, "%s%s", first ? "" : ", ",
+				       exr->passes[j].pass[0] ? exr->passes[j].pass
+				                              : "<no pass name>");
+				first = 0;
+			}
+		append(buf, cap, ")");
+	}
+	if (!buf[0])
+		append(buf, cap, "none (the file has no channels)");
+}
+
+#define BLENDER_HINT "in Blender enable View Layer Properties > Passes > " \
+	"Light > Diffuse: Direct, Indirect, Color and Passes > Data: Z, " \
+	"Material Index"
+
+sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
+                                 sss_passes *passes, const char **layer_used,
+                                 char *errbuf, size_t errbuf_len)
+{
+	static const struct {
+		const char *name;
+		size_t offset;   /* of the sss_image in sss_passes */
+		const char *run; /* components needed, in order */
+		const char *alt; /* or this single component */
+		int required;
+	} table[] = {
+		{"DiffDir", offsetof(sss_passes, diff_dir), "RGB", NULL, 1},
+		{"DiffInd", offsetof(sss_passes, diff_ind), "RGB", NULL, 0},
+		{"DiffCol", offsetof(sss_passes, diff_col), "RGB", NULL, 1},
+		{"GlossDir", offsetof(sss_passes, gloss_dir), "RGB", NULL, 0},
+		{"GlossInd", offsetof(sss_passes, gloss_ind), "RGB", NULL, 0},
+		{"GlossCol", offsetof(sss_passes, gloss_col), "RGB", NULL, 0},
+		{"TransDir", offsetof(sss_passes, trans_dir), "RGB", NULL, 0},
+		{"TransInd", offsetof(sss_passes, trans_ind), "RGB", NULL, 0},
+		{"TransCol", offsetof(sss_passes, trans_col), "RGB", NULL, 0},
+		{"Emit", offsetof(sss_passes, emit), "RGB", NULL, 0},
+		{"Env", offsetof(sss_passes, env), "RGB", NULL, 0},
+		{"Combined", offsetof(sss_passes, combined), "RGBA", NULL, 0},
+		{"Depth", offsetof(sss_passes, depth), "Z", "V", 1},
+		{"IndexMA", offsetof(sss_passes, index_ma), "X", "V", 1},
+		{"Position", offsetof(sss_passes, position), "XYZ", NULL, 0},
+	};
+	char layers[1024] = "";
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (layer_used)
+		*layer_used = NULL;
+	if (!exr || !passes)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_render_passes: %s "
+		             "is NULL", exr ? "passes" : "exr");
+	memset(passes, 0, sizeof *passes);
+
+	/* The layer: as named, or the first (in file order) with DiffDir. */
+	const char *use = NULL;
+	for (int32_t i = 0; i < exr->pass_count && !use; i++) {
+		const xpass *p = &exr->passes[i];
+		if (layer ? strcmp(p->layer, layer) == 0
+		          : strcmp(p->pass, "DiffDir") == 0)
+			use = p->layer;
+	}
+	if (!use) {
+		describe_layers(exr, layers, sizeof layers);
+		if (layer)
+			return FAILX(SSS_ERR_MISSING_PASS, "%s: no layer '%s'; layers "
+			             "in the file: %s", exr->path, layer, layers);
+		return FAILX(SSS_ERR_MISSING_PASS, "%s: no layer has a DiffDir "
+		             "pass; layers in the file: %s; " BLENDER_HINT,
+		             exr->path, layers);
+	}
+
+	char missing[256] = "";
+	for (size_t t = 0; t < sizeof table / sizeof *table; t++) {
+		const xpass *p = find_pass(exr, use, table[t].name);
+		if (!p) {
+			if (table[t].required)
+				append(missing, sizeof missing, "%s%s",
+				       missing[0] ? ", " : "", table[t].name);
+			continue;
+		}
+		int32_t at = find_run(p, table[t].run);
+		if (at < 0 && table[t].alt)
+			at = find_run(p, table[t].alt);
+		if (at < 0 && strcmp(table[t].name, "Combined") == 0)
+			continue; /* RGB only: its alpha is what libsss would use */
+		if (at < 0) {
+			memset(passes, 0, sizeof *passes);
+			return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s': pass %s "
+			             "has components '%s' but needs %s%s%s", exr->path,
+			             use, table[t].name, p->components, table[t].run,
+			             table[t].alt ? " or " : "",
+			             table[t].alt ? table[t].alt : "");
+		}
+		*(sss_image *)((char *)passes + table[t].offset) =
+			view_of(exr, p, at);
+	}
+	if (missing[0]) {
+		memset(passes, 0, sizeof *passes);
+		describe_layers(exr, layers, sizeof layers);
+		return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s' has no %s pass%s"
+		             "; layers in the file: %s; " BLENDER_HINT, exr->path,
+		             use, missing, strchr(missing, ',') ? "es" : "",
+		             layers);
+	}
+	if (layer_used)
+		*layer_used = use;
+	return SSS_OK;
+}
+
+/* ------------------------------------------------------------ add pass */
+
+sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
+                            const char *components, const float *data,
+                            char *errbuf, size_t errbuf_len)
+{
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (!exr || !data || !components || !components[0])
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_add_pass: %s",
+		             !exr ? "exr is NULL" : !data ? "data is NULL"
+		                                          : "no components");
+	layer = layer ? layer : "";
+	pass = pass ? pass : "";
+	/* Names must read back as the same layer and pass (split_name). */
+	if (strchr(layer, '.'))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "layer name '%s' must not "
+		             "contain a dot", layer);
+	if (!layer[0] && strchr(pass, '.'))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass name '%s' contains a "
+		             "dot, which needs a layer name", pass);
+	size_t n = strlen(components);
+	if (strlen(layer) + strlen(pass) + 3 > MAX_NAME)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "layer and pass names "
+		             "'%s.%s' are too long for EXR channel names", layer,
+		             pass);
+	for (size_t i = 0; i < n; i++)
+		if (components[i] == '.' || strchr(components + i + 1,
+		                                   components[i]))
+			return FAILX(SSS_ERR_INVALID_ARGUMENT, "components '%s': "
+			             "'%c' is %s", components, components[i],
+			             components[i] == '.' ? "not a component name"
+			                                  : "repeated");
+	if ((int64_t)exr->width * (int64_t)n * (int64_t)sizeof(float) >
+	    INT32_MAX)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "components '%s': too many "
+		             "for a %d pixel wide image", components, exr->width);
+
+	/* Everything new is built first; exr changes only on success. */
+	size_t npix = (size_t)exr->width * (size_t)exr->height;
+	xpass np = {NULL, NULL, NULL, (int32_t)n, NULL, NULL};
+	int32_t order[256];
+	if (n > 256)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "components '%s': more "
+		             "than 256", components);
+	for (int32_t k = 0; k < (int32_t)n; k++) {
+		/* canonical order, as for passes read from files */
+		char a[2] = {components[k], '\0'};
+		int32_t at = k;
+		while (at > 0) {
+			char b[2] = {components[order[at - 1]], '\0'};
+			if (comp_cmp(a, b) >= 0)
+				break;
+			order[at] = order[at - 1];
+			at--;
+		}
+		order[at] = k;
+	}
+	np.chan = calloc(n, sizeof *np.chan);
+	np.data = npix <= SIZE_MAX / sizeof(float) / n
+	          ? malloc(npix * n * sizeof(float)) : NULL;
+	int ok = np.chan && np.data;
+	for (size_t k = 0; ok && k < n; k++) {
+		size_t len = strlen(layer) + strlen(pass) + 4;
+		char *name = malloc(len);
+		if (!(ok = name != NULL))
+			break;
+		char c = components[order[k]];
+		if (layer[0])
+			snprintf(name, len, "%s.%s.%c", layer, pass, c);
+		else if (pass[0])
+			snprintf(name, len, "%s.%c", pass, c);
+		else
+			snprintf(name, len, "%c", c);
+		np.chan[k] = (xchan){name, name + strlen(name) - 1,
+		                     EXR_PIXEL_FLOAT, 0, -1};
+	}
+	ok = ok && make_components(&np) == 0;
+	xpass *slot = find_pass(exr, layer, pass);
+	if (ok && !slot)
+		ok = (slot = append_pass(exr, layer, strlen(layer), pass,
+		                         strlen(pass))) != NULL;
+	if (!ok) {
+		if (!np.chan)
+			np.count = 0;
+		pass_free(&np);
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot add pass '%s.%s' "
+		             "(%dx%d x %zu floats)", layer, pass, exr->width,
+		             exr->height, n);
+	}
+	for (size_t i = 0; i < npix; i++)
+		for (size_t k = 0; k < n; k++)
+			np.data[i * n + k] = data[i * n + (size_t)order[k]];
+	/* Replacing keeps the layer and pass strings, so names handed out
+	 * by sss_exr_pass or sss_exr_render_passes stay valid. */
+	pass_free(slot);
+	slot->components = np.components;
+	slot->count = np.count;
+	slot->chan = np.chan;
+	slot->data = np.data;
+	return SSS_OK;
+}
+
+/* ---------------------------------------------------------------- write */
+
+/* Required and structural attributes: set by us for a single-part
+ * scanline file, never copied from the source (which may be tiled, deep
+ * or multi-part). Everything else (Blender's metadata) is copied. */
+static int is_structural(const char *name)
+{
+	static const char *const names[] = {
+		"channels", "compression", "dataWindow", "displayWindow",
+		"lineOrder", "pixelAspectRatio", "screenWindowCenter",
+		"screenWindowWidth", "tiles", "type", "name", "version",
+		"chunkCount", "maxSamplesPerPixel",
+	};
+	for (size_t i = 0; i < sizeof names / sizeof *names; i++)
+		if (strcmp(name, names[i]) == 0)
+			return 1;
+	return 0;
+}
+
+/* The source's attributes, file order; *list is malloc'ed. */
+static exr_result_t source_attributes(const sss_exr *exr,
+                                      const exr_attribute_t ***list,
+                                      int32_t *count)
+{
+	*list = NULL;
+	*count = 0;
+	exr_result_t rv = exr_get_attribute_list(
+		exr->header, 0, EXR_ATTR_LIST_FILE_ORDER, count, NULL);
+	if (rv != EXR_ERR_SUCCESS || *count <= 0)
+		return rv;
+	*list = malloc((size_t)*count * sizeof **list);
+	if (!*list)
+		return EXR_ERR_OUT_OF_MEMORY;
+	return exr_get_attribute_list(exr->header, 0, EXR_ATTR_LIST_FILE_ORDER,
+	                              count, *list);
+}
+
+/* One attribute through the typed setter for its type. */
+static exr_result_t copy_attribute(exr_context_t c, int part,
+                                   const exr_attribute_t *a)
+{
+	const char *n = a->name;
+	switch (a->type) {
+	case EXR_ATTR_BOX2I: return exr_attr_set_box2i(c, part, n, a->box2i);
+	case EXR_ATTR_BOX2F: return exr_attr_set_box2f(c, part, n, a->box2f);
+	case EXR_ATTR_CHLIST:
+		return exr_attr_set_channels(c, part, n, a->chlist);
+	case EXR_ATTR_CHROMATICITIES:
+		return exr_attr_set_chromaticities(c, part, n, a->chromaticities);
+	case EXR_ATTR_COMPRESSION:
+		return exr_attr_set_compression(c, part, n,
+		                                (exr_compression_t)a->uc);
+	case EXR_ATTR_DOUBLE: return exr_attr_set_double(c, part, n, a->d);
+	case EXR_ATTR_ENVMAP:
+		return exr_attr_set_envmap(c, part, n, (exr_envmap_t)a->uc);
+	case EXR_ATTR_FLOAT: return exr_attr_set_float(c, part, n, a->f);
+	case EXR_ATTR_FLOAT_VECTOR:
+		return exr_attr_set_float_vector(c, part, n,
+		                                 a->floatvector->length,
+		                                 a->floatvector->arr);
+	case EXR_ATTR_INT: return exr_attr_set_int(c, part, n, a->i);
+	case EXR_ATTR_KEYCODE:
+		return exr_attr_set_keycode(c, part, n, a->keycode);
+	case EXR_ATTR_LINEORDER:
+		return exr_attr_set_lineorder(c, part, n, (exr_lineorder_t)a->uc);
+	case EXR_ATTR_M33F: return exr_attr_set_m33f(c, part, n, a->m33f);
+	case EXR_ATTR_M33D: return exr_attr_set_m33d(c, part, n, a->m33d);
+	case EXR_ATTR_M44F: return exr_attr_set_m44f(c, part, n, a->m44f);
+	case EXR_ATTR_M44D: return exr_attr_set_m44d(c, part, n, a->m44d);
+	case EXR_ATTR_PREVIEW:
+		return exr_attr_set_preview(c, part, n, a->preview);
+	case EXR_ATTR_RATIONAL:
+		return exr_attr_set_rational(c, part, n, a->rational);
+	case EXR_ATTR_STRING:
+		return exr_attr_set_string(c, part, n, a->string->str);
+	case EXR_ATTR_STRING_VECTOR: {
+		const exr_attr_string_vector_t *sv = a->stringvector;
+		const char **s = malloc((size_t)(sv->n_strings > 0 ? sv->n_strings
+		                                                   : 1) *
+		                        sizeof *s);
+		if (!s)
+			return EXR_ERR_OUT_OF_MEMORY;
+		for (int32_t i = 0; i < sv->n_strings; i++)
+			s[i] = sv->strings[i].str;
+		exr_result_t rv = exr_attr_set_string_vector(c, part, n,
+		                                             sv->n_strings, s);
+		free(s);
+		return rv;
+	}
+	case EXR_ATTR_TILEDESC:
+		return exr_attr_set_tiledesc(c, part, n, a->tiledesc);
+	case EXR_ATTR_TIMECODE:
+		return exr_attr_set_timecode(c, part, n, a->timecode);
+	case EXR_ATTR_V2I: return exr_attr_set_v2i(c, part, n, a->v2i);
+	case EXR_ATTR_V2F: return exr_attr_set_v2f(c, part, n, a->v2f);
+	case EXR_ATTR_V2D: return exr_attr_set_v2d(c, part, n, a->v2d);
+	case EXR_ATTR_V3I: return exr_attr_set_v3i(c, part, n, a->v3i);
+	case EXR_ATTR_V3F: return exr_attr_set_v3f(c, part, n, a->v3f);
+	case EXR_ATTR_V3D: return exr_attr_set_v3d(c, part, n, a->v3d);
+	case EXR_ATTR_OPAQUE:
+		return exr_attr_set_user(c, part, n, a->type_name, a->opaque->size,
+		                         a->opaque->packed_data);
+	default:
+		return EXR_ERR_INVALID_ATTR;
+	}
+}
+
+/* Chunk encoding: a round of up to `slots` chunks is packed and
+ * compressed in parallel (one pipeline per slot, kept across rounds),
+ * then written in scanline order by the calling thread, since an
+ * INCREASING_Y file takes its chunks in order. */
+typedef struct write_job {
+	exr_context_t ctxt;
+	int part;
+	const sss_exr *exr;
+	const chan_ref *ref;         /* per channel of the (sorted) list */
+	const exr_chunk_info_t *info; /* per chunk */
+	exr_encode_pipeline_t *pipe; /* per slot */
+	uint8_t *started;            /* per slot */
+	exr_result_t *rv;            /* per slot, this round */
+	int32_t first;               /* chunk of slot 0 in this round */
+} write_job;
+
+static void encode_slots(void *arg, int32_t s0, int32_t s1)
+{
+	write_job *job = arg;
+	const sss_exr *exr = job->exr;
+	for (int32_t s = s0; s < s1; s++) {
+		const exr_chunk_info_t *ci = &job->info[job->first + s];
+		exr_encode_pipeline_t *enc = &job->pipe[s];
+		exr_result_t rv = job->started[s]
+		                  ? exr_encoding_update(job->ctxt, job->part, ci, enc)
+		                  : exr_encoding_initialize(job->ctxt, job->part, ci,
+		                                            enc);
+		size_t y0 = (size_t)(ci->start_y - exr->data_window.min.y);
+		for (int k = 0; rv == EXR_ERR_SUCCESS && k < enc->channel_count;
+		     k++) {
+			exr_coding_channel_info_t *ch = &enc->channels[k];
+			const chan_ref *r = &job->ref[k];
+			size_t at = y0 * (size_t)exr->width * (size_t)r->count +
+			            (size_t)r->k;
+			ch->encode_from_ptr = (const uint8_t *)(r->data + at);
+			ch->user_pixel_stride = r->count * (int32_t)sizeof(float);
+			ch->user_line_stride = exr->width * r->count *
+			                       (int32_t)sizeof(float);
+			ch->user_bytes_per_element = (int16_t)sizeof(float);
+			ch->user_data_type = EXR_PIXEL_FLOAT;
+		}
+		if (rv == EXR_ERR_SUCCESS && !job->started[s])
+			rv = exr_encoding_choose_default_routines(job->ctxt, job->part,
+			                                          enc);
+		job->started[s] = 1;
+		/* Pack and compress only; the caller writes, in order. */
+		enc->yield_until_ready_fn = NULL;
+		enc->write_fn = NULL;
+		if (rv == EXR_ERR_SUCCESS)
+			rv = exr_encoding_run(job->ctxt, job->part, enc);
+		job->rv[s] = rv;
+	}
+}
+
+static exr_result_t encode_chunks(exr_context_t c, int part,
+                                  const sss_exr *exr, int32_t threads,
+                                  int32_t *bad_y)
+{
+	const exr_attr_chlist_t *cl = NULL;
+	int32_t lines = 0;
+	exr_result_t rv = exr_get_channels(c, part, &cl);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_scanlines_per_chunk(c, part, &lines);
+	if (rv != EXR_ERR_SUCCESS)
+		return rv;
+	if (lines < 1 || cl->num_channels < 1)
+		return EXR_ERR_INVALID_ARGUMENT;
+	int32_t chunks = (int32_t)(((int64_t)exr->height + lines - 1) / lines);
+	int32_t slots = threads > 0 ? threads
+	                            : (int32_t)sysconf(_SC_NPROCESSORS_ONLN);
+	slots = slots < 1 ? 1 : slots > chunks ? chunks : slots;
+
+	write_job job = {.ctxt = c, .part = part, .exr = exr};
+	chan_ref *ref = calloc((size_t)cl->num_channels, sizeof *ref);
+	exr_chunk_info_t *info = calloc((size_t)chunks, sizeof *info);
+	job.pipe = calloc((size_t)slots, sizeof *job.pipe);
+	job.started = calloc((size_t)slots, 1);
+	job.rv = calloc((size_t)slots, sizeof *job.rv);
+	if (!ref || !info || !job.pipe || !job.started || !job.rv)
+		rv = EXR_ERR_OUT_OF_MEMORY;
+
+	/* The library sorted the channel list; find each one's pass. */
+	for (int i = 0; rv == EXR_ERR_SUCCESS && i < cl->num_channels; i++) {
+		const char *name = cl->entries[i].name.str;
+		for (int32_t j = 0; j < exr->pass_count && !ref[i].data; j++)
+			for (int32_t k = 0; k < exr->passes[j].count; k++)
+				if (strcmp(exr->passes[j].chan[k].name, name) == 0) {
+					ref[i] = (chan_ref){exr->passes[j].data,
+					                    exr->passes[j].count, k};
+					break;
+				}
+		if (!ref[i].data)
+			rv = EXR_ERR_INVALID_ARGUMENT;
+	}
+	for (int32_t i = 0; rv == EXR_ERR_SUCCESS && i < chunks; i++)
+		rv = exr_write_scanline_chunk_info(
+			c, part, exr->data_window.min.y + i * lines, &info[i]);
+	job.ref = ref;
+	job.info = info;
+
+	for (int32_t first = 0; rv == EXR_ERR_SUCCESS && first < chunks;
+	     first += slots) {
+		int32_t n = chunks - first < slots ? chunks - first : slots;
+		job.first = first;
+		sss__parallel_rows(n, n, encode_slots, &job);
+		for (int32_t s = 0; rv == EXR_ERR_SUCCESS && s < n; s++) {
+			*bad_y = info[first + s].start_y;
+			rv = job.rv[s];
+			if (rv == EXR_ERR_SUCCESS)
+				rv = exr_write_scanline_chunk(
+					c, part, info[first + s].start_y,
+					job.pipe[s].compressed_buffer,
+					job.pipe[s].compressed_bytes);
+		}
+	}
+	for (int32_t s = 0; job.started && s < slots; s++)
+		if (job.started[s])
+			exr_encoding_destroy(c, &job.pipe[s]);
+	free(job.pipe);
+	free(job.started);
+	free(job.rv);
+	free(info);
+	free(ref);
+	return rv;
+}
+
+/* Long (up to 255 byte) names are an EXR 2 feature, switched on only when
+ * a channel or copied attribute needs one, for older readers' sake. */
+static int needs_long_names(const sss_exr *exr,
+                            const exr_attribute_t *const *attrs,
+                            int32_t count)
+{
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		for (int32_t k = 0; k < exr->passes[j].count; k++)
+			if (strlen(exr->passes[j].chan[k].name) > SHORT_NAME)
+				return 1;
+	for (int32_t i = 0; i < count; i++)
+		if (!is_structural(attrs[i]->name) &&
+		    (attrs[i]->name_length > SHORT_NAME ||
+		     attrs[i]->type_name_length > SHORT_NAME))
+			return 1;
+	return 0;
+}
+
+/* Writes the whole file to io (the temporary file). */
+static sss_result write_file(const sss_exr *exr, const sss_exr_options *o,
+                             const char *path, const char *tmp, xio *io,
+                             char *errbuf, size_t errbuf_len)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	init.error_handler_fn = on_write_error;
+	init.user_data = io;
+	init.write_fn = io_write;
+	exr_context_t c = NULL;
+	const exr_attribute_t **attrs = NULL;
+	int32_t nattrs = 0, bad_y = 0;
+	int part = 0;
+	char step[160] = "reading the source header";
+	exr_result_t rv = source_attributes(exr, &attrs, &nattrs);
+
+	if (rv == EXR_ERR_SUCCESS) {
+		snprintf(step, sizeof step, "starting the file");
+		rv = exr_start_write(&c, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+	}
+	if (rv == EXR_ERR_SUCCESS) {
+		snprintf(step, sizeof step, "defining the header");
+		rv = exr_add_part(c, NULL, EXR_STORAGE_SCANLINE, &part);
+	}
+	if (rv == EXR_ERR_SUCCESS && needs_long_names(exr, attrs, nattrs))
+		rv = exr_set_longname_support(c, 1);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_initialize_required_attr_simple(
+			c, part, exr->width, exr->height,
+			(exr_compression_t)o->compression);
+	/* The source's windows (a border render's data window is offset). */
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_set_data_window(c, part, &exr->data_window);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_set_display_window(c, part, &exr->display_window);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_set_pixel_aspect_ratio(c, part, exr->pixel_aspect);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_set_screen_window_center(c, part, &exr->screen_center);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_set_screen_window_width(c, part, exr->screen_width);
+	/* Original pixel types: half stays half, bit for bit. */
+	for (int32_t j = 0; rv == EXR_ERR_SUCCESS && j < exr->pass_count; j++)
+		for (int32_t k = 0; rv == EXR_ERR_SUCCESS &&
+		                    k < exr->passes[j].count; k++) {
+			const xchan *ch = &exr->passes[j].chan[k];
+			snprintf(step, sizeof step, "adding channel '%s'", ch->name);
+			rv = exr_add_channel(c, part, ch->name,
+			                     (exr_pixel_type_t)ch->type,
+			                     ch->p_linear ? EXR_PERCEPTUALLY_LINEAR
+			                                  : EXR_PERCEPTUALLY_LOGARITHMIC,
+			                     1, 1);
+		}
+	for (int32_t i = 0; rv == EXR_ERR_SUCCESS && i < nattrs; i++) {
+		if (is_structural(attrs[i]->name))
+			continue;
+		snprintf(step, sizeof step, "copying header attribute '%s'",
+		         attrs[i]->name);
+		rv = copy_attribute(c, part, attrs[i]);
+	}
+	if (rv == EXR_ERR_SUCCESS) {
+		snprintf(step, sizeof step, "writing the header");
+		rv = exr_write_header(c);
+	}
+	if (rv == EXR_ERR_SUCCESS && exr->pass_count > 0) {
+		rv = encode_chunks(c, part, exr, o->num_threads, &bad_y);
+		if (rv != EXR_ERR_SUCCESS)
+			snprintf(step, sizeof step, "encoding the scanlines at y %d",
+			         bad_y);
+	}
+	if (c) {
+		/* Writes the chunk offset table; on failure the file is dropped
+		 * by the caller anyway. */
+		exr_result_t fr = exr_finish(&c);
+		if (rv == EXR_ERR_SUCCESS && fr != EXR_ERR_SUCCESS) {
+			snprintf(step, sizeof step, "finishing the file");
+			rv = fr;
+		}
+	}
+	free(attrs);
+	if (rv != EXR_ERR_SUCCESS)
+		return exr_fail(errbuf, errbuf_len, path, step, rv, io);
+	return SSS_OK;
+}
+
+/* Creates a new, unique, empty file beside path (same directory, so the
+ * final rename is atomic): "<dir>/.<name>.tmp-<pid>-<n>". O_EXCL makes it
+ * ours alone; mode 0666 less the umask, as any new file. */
+static int create_temp(const char *path, char **out)
+{
+	const char *slash = strrchr(path, '/');
+	size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
+	size_t base_len = strlen(path + dir_len);
+	if (base_len > 128) /* stay under NAME_MAX */
+		base_len = 128;
+	size_t cap = dir_len + base_len + 64;
+	char *t = malloc(cap);
+	if (!t) {
+		errno = ENOMEM;
+		return -1;
+	}
+	struct timespec ts;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	/* Time and this call's buffer address: distinct across threads. */
+	unsigned long n = (unsigned long)ts.tv_nsec ^ (unsigned long)(uintptr_t)t;
+	for (int attempt = 0; attempt < 64; attempt++, n += 7919) {
+		snprintf(t, cap, "%.*s.%.*s.tmp-%ld-%lx", (int)dir_len, path,
+		         (int)base_len, path + dir_len, (long)getpid(), n & 0xffffffUL);
+		int fd = open(t, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+		if (fd >= 0) {
+			*out = t;
+			return fd;
+		}
+		if (errno != EEXIST)
+			break;
+	}
+	int e = errno;
+	free(t);
+	errno = e;
+	return -1;
+}
+
+sss_result sss_exr_write(const sss_exr *exr, const char *path,
+                         const sss_exr_options *opt, char *errbuf,
+                         size_t errbuf_len)
+{
+	sss_exr_options o;
+	sss_result r;
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (!exr || !path || !path[0])
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_write: %s",
+		             exr ? "no path" : "exr is NULL");
+	if ((r = get_options(opt, &o, errbuf, errbuf_len)))
+		return r;
+	if (path[strlen(path) - 1] == '/')
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: names a directory",
+		             path);
+	if (exr->pass_count == 0)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: the image has no "
+		             "channels to write", path);
+
+	/* Same device and inode as the source (any name, link or symlink
+	 * to it): refused, so a failed or partial run never loses a render. */
+	struct stat st;
+	if (stat(path, &st) == 0) {
+		if (st.st_dev == exr->dev && st.st_ino == exr->ino)
+			return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: is the file this "
+			             "image was read from (%s); refusing to overwrite "
+			             "it", path, exr->path);
+		if (S_ISDIR(st.st_mode))
+			return FAILX(SSS_ERR_IO, "%s: is a directory", path);
+	}
+
+	char *tmp = NULL;
+	int fd = create_temp(path, &tmp);
+	if (fd < 0)
+		return FAILX(SSS_ERR_IO, "%s: cannot create a temporary file in "
+		             "its directory: %s", path, strerror(errno));
+	xio io;
+	xio_init(&io, fd);
+	r = write_file(exr, &o, path, tmp, &io, errbuf, errbuf_len);
+	if (close(fd) && !r)
+		r = FAILX(SSS_ERR_IO, "%s: writing %s: %s", path, tmp,
+		          strerror(errno));
+	if (!r && rename(tmp, path))
+		r = FAILX(SSS_ERR_IO, "%s: cannot rename %s to it: %s", path, tmp,
+		          strerror(errno));
+	if (r)
+		unlink(tmp); /* path itself was never touched */
+	pthread_mutex_destroy(&io.lock);
+	free(tmp);
+	return r;
+}

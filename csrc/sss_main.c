@@ -1,0 +1,438 @@
+/* sss_main.c - the `sss` command: SSS post-process on Blender multilayer
+ * EXR frames, without Blender. What a render farm runs after its render
+ * tasks; the add-on takes the same path. */
+#define _GNU_SOURCE /* getopt_long */
+#include "sss.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char usage_text[] =
+"usage: sss INPUT.exr -o OUTPUT.exr --scene SCENE.json [options]\n"
+"\n"
+"Adds screen-space subsurface scattering to Blender multilayer EXR renders.\n"
+"The output keeps every input channel and adds a layer SSS with the passes\n"
+"Combined (RGBA) and DiffLight (the scattered diffuse light, RGB).\n"
+"\n"
+"The input needs, in one view layer: DiffDir and DiffCol (Diffuse Direct and\n"
+"Color; DiffInd too for Cycles), Depth (Data: Z) and IndexMA (Data: Material\n"
+"Index); GlossDir/Ind/Col, TransDir/Ind/Col, Emit, Env, Combined and\n"
+"Position are used when present.\n"
+"\n"
+"options:\n"
+"  -o, --output PATH       output file (#### pattern for sequences); never\n"
+"                          the input file; written to a temporary file first\n"
+"  -s, --scene PATH        scene description (JSON: camera, unit scale,\n"
+"                          materials by pass index; see docs/scene.md)\n"
+"  -f, --frames LIST       frames for #### patterns: 1-240, 1-240x2, 7,9,12-20\n"
+"  -m, --method NAME       separable (default) or reference (slow, exact)\n"
+"  -r, --radius-scale F    multiply every radius by F >= 0 (0 = no scattering:\n"
+"                          SSS.Combined is then the recombined passes)\n"
+"  -l, --layer NAME        view layer to use (default: the first with DiffDir)\n"
+"  -c, --compression NAME  output compression: zip (default), zips, piz,\n"
+"                          rle, pxr24, b44, b44a, none (lossless: zip, zips,\n"
+"                          piz, rle, none)\n"
+"  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
+"      --max-size WxH      refuse inputs larger than this (default 32768x32768)\n"
+"  -q, --quiet             print errors only\n"
+"  -h, --help              this text\n"
+"  -V, --version           version\n"
+"\n"
+"examples:\n"
+"  sss shot.exr -o shot_sss.exr --scene shot.json\n"
+"  sss render/frame_####.exr --frames 1-240 -o sss/frame_####.exr \\\n"
+"      --scene shot.json --threads 8\n"
+"  sss shot.exr -o check.exr --scene shot.json --radius-scale 0\n"
+"\n"
+"exit status: 0 all frames written, 1 some frame failed, 2 bad usage or scene.\n";
+
+typedef struct args {
+	const char *input, *output, *scene, *layer;
+	const char *frames;
+	int method;          /* -1 = the scene's */
+	double radius_scale; /* multiplies the scene's */
+	int compression;
+	int threads;         /* -1 = the scene's */
+	int max_w, max_h;
+	int quiet;
+} args;
+
+static double now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int usage_error(const char *fmt, const char *what)
+{
+	fprintf(stderr, "sss: ");
+	fprintf(stderr, fmt, what);
+	fprintf(stderr, "\nTry 'sss --help'.\n");
+	return 2;
+}
+
+static int lookup(const char *name, const char *const *names, int count)
+{
+	for (int i = 0; i < count; i++)
+		if (names[i] && strcmp(name, names[i]) == 0)
+			return i;
+	return -1;
+}
+
+static const char *const method_names[] = {"separable", "separable-exact",
+                                           "disk", "reference"};
+/* Indexed by sss_exr_compression; DWAA/DWAB are absent from OpenEXR 3.1's
+ * C API, so they are not offered. */
+static const char *const compression_names[] = {"none", "rle", "zips", "zip",
+                                                "piz", "pxr24", "b44", "b44a"};
+
+/* ------------------------------------------------------------ frames */
+
+typedef struct frame_list {
+	int *frames;
+	int count;
+} frame_list;
+
+/* "1-240", "1-240x2", "7,9,12-20" -> frames in order. */
+static int parse_frames(const char *text, frame_list *out)
+{
+	int cap = 0;
+	out->frames = NULL;
+	out->count = 0;
+	const char *p = text;
+	while (*p) {
+		char *end;
+		errno = 0;
+		long a = strtol(p, &end, 10), b = a, step = 1;
+		if (end == p || errno)
+			return -1;
+		p = end;
+		if (*p == '-') {
+			b = strtol(p + 1, &end, 10);
+			if (end == p + 1 || errno)
+				return -1;
+			p = end;
+			if (*p == 'x') {
+				step = strtol(p + 1, &end, 10);
+				if (end == p + 1 || step < 1)
+					return -1;
+				p = end;
+			}
+		}
+		if (a < 0 || b < a || b > 99999999 || (b - a) / step > 1000000)
+			return -1;
+		for (long f = a; f <= b; f += step) {
+			if (out->count == cap) {
+				cap = cap ? 2 * cap : 64;
+				int *grown = realloc(out->frames, cap * sizeof *grown);
+				if (!grown)
+					return -1;
+				out->frames = grown;
+			}
+			out->frames[out->count++] = (int)f;
+		}
+		if (*p == ',')
+			p++;
+		else if (*p)
+			return -1;
+	}
+	return out->count > 0 ? 0 : -1;
+}
+
+/* Replaces the run of '#' in pattern with the zero-padded frame number. */
+static int expand(const char *pattern, int frame, char *out, size_t len)
+{
+	const char *hash = strchr(pattern, '#');
+	if (!hash)
+		return snprintf(out, len, "%s", pattern) < (int)len ? 0 : -1;
+	int width = 0;
+	while (hash[width] == '#')
+		width++;
+	int n = snprintf(out, len, "%.*s%0*d%s", (int)(hash - pattern), pattern,
+	                 width, frame, hash + width);
+	return n >= 0 && (size_t)n < len ? 0 : -1;
+}
+
+/* ------------------------------------------------------------ one frame */
+
+typedef struct timings {
+	double read, sss, write;
+} timings;
+
+static int has_usable_depth(const sss_image *depth)
+{
+	int64_t stride = depth->row_stride ? depth->row_stride
+	                 : (int64_t)depth->width * depth->channels;
+	for (int32_t y = 0; y < depth->height; y++)
+		for (int32_t x = 0; x < depth->width; x++) {
+			float z = depth->data[y * stride + (int64_t)x * depth->channels];
+			if (z > 0.0f && z < 3.0e38f)
+				return 1;
+		}
+	return 0;
+}
+
+static int process_frame(const args *a, const sss_scene *scene,
+                         const char *in, const char *out, timings *t,
+                         char *err, size_t errlen)
+{
+	sss_exr_options xo;
+	sss_exr_options_default(&xo);
+	xo.max_width = a->max_w;
+	xo.max_height = a->max_h;
+	if (a->compression >= 0)
+		xo.compression = a->compression;
+	sss_exr *exr = NULL;
+	float *combined = NULL, *light = NULL;
+	int rc = 1;
+
+	double t0 = now();
+	if (sss_exr_read(in, &xo, &exr, err, errlen))
+		goto done;
+	t->read = now() - t0;
+
+	sss_passes passes;
+	const char *layer = NULL;
+	if (sss_exr_render_passes(exr, a->layer, &passes, &layer, err, errlen))
+		goto done;
+	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
+	size_t n = (size_t)w * (size_t)h;
+	/* The library passes pixels with a bad depth through, one by one; a
+	 * Depth pass without a single usable value is a broken file. */
+	if (!has_usable_depth(&passes.depth)) {
+		snprintf(err, errlen, "%s (layer '%s'): the Depth pass has no "
+		         "finite positive value (NaN-filled or empty)", in, layer);
+		goto done;
+	}
+	combined = malloc(n * 4 * sizeof *combined);
+	light = malloc(n * 3 * sizeof *light);
+	if (!combined || !light) {
+		snprintf(err, errlen, "%s: out of memory for a %dx%d frame", in, w,
+		         h);
+		goto done;
+	}
+	sss_options opt = *sss_scene_options(scene);
+	if (a->method >= 0)
+		opt.method = a->method;
+	if (a->threads >= 0)
+		opt.num_threads = a->threads;
+	opt.radius_scale = (float)(opt.radius_scale * a->radius_scale);
+	int32_t count;
+	const sss_material *mats = sss_scene_materials(scene, &count);
+	sss_image oc = {combined, w, h, 4, 0}, ol = {light, w, h, 3, 0};
+	char detail[512];
+	t0 = now();
+	sss_result r = sss_apply(&passes, sss_scene_camera(scene), mats, count,
+	                         &opt, &oc, &ol, detail, sizeof detail);
+	t->sss = now() - t0;
+	if (r) {
+		snprintf(err, errlen, "%s (layer '%s'): %s: %s", in, layer,
+		         sss_status_string(r), detail);
+		goto done;
+	}
+
+	t0 = now();
+	if (sss_exr_add_pass(exr, "SSS", "Combined", "RGBA", combined, err,
+	                     errlen) ||
+	    sss_exr_add_pass(exr, "SSS", "DiffLight", "RGB", light, err,
+	                     errlen) ||
+	    sss_exr_write(exr, out, &xo, err, errlen))
+		goto done;
+	t->write = now() - t0;
+	rc = 0;
+done:
+	free(combined);
+	free(light);
+	sss_exr_free(exr);
+	return rc;
+}
+
+/* Same file, by name or by inode: never write over an input. */
+static int same_file(const char *a, const char *b)
+{
+	struct stat sa, sb;
+	if (strcmp(a, b) == 0)
+		return 1;
+	if (stat(a, &sa) || stat(b, &sb))
+		return 0;
+	return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+static void progress_bar(int done, int total, int failed)
+{
+	int width = 30, fill = total ? done * width / total : width;
+	fprintf(stderr, "\r[%.*s%*s] %d/%d frames%s", fill,
+	        "##############################", width - fill, "", done, total,
+	        failed ? " (some failed)" : "");
+	if (done == total)
+		fputc('\n', stderr);
+	fflush(stderr);
+}
+
+int main(int argc, char **argv)
+{
+	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, 32768, 32768, 0};
+	static const struct option longopts[] = {
+		{"output", required_argument, NULL, 'o'},
+		{"scene", required_argument, NULL, 's'},
+		{"frames", required_argument, NULL, 'f'},
+		{"method", required_argument, NULL, 'm'},
+		{"radius-scale", required_argument, NULL, 'r'},
+		{"layer", required_argument, NULL, 'l'},
+		{"compression", required_argument, NULL, 'c'},
+		{"threads", required_argument, NULL, 't'},
+		{"max-size", required_argument, NULL, 'S'},
+		{"quiet", no_argument, NULL, 'q'},
+		{"help", no_argument, NULL, 'h'},
+		{"version", no_argument, NULL, 'V'},
+		{NULL, 0, NULL, 0},
+	};
+	int c;
+	char *end;
+	while ((c = getopt_long(argc, argv, "o:s:f:m:r:l:c:t:qhV", longopts,
+	                        NULL)) != -1) {
+		switch (c) {
+		case 'o': a.output = optarg; break;
+		case 's': a.scene = optarg; break;
+		case 'f': a.frames = optarg; break;
+		case 'l': a.layer = optarg; break;
+		case 'q': a.quiet = 1; break;
+		case 'h': fputs(usage_text, stdout); return 0;
+		case 'V':
+			printf("sss %s (libsss ABI %u)\n", sss_version_string(),
+			       sss_abi_version());
+			return 0;
+		case 'm':
+			a.method = lookup(optarg, method_names, 4);
+			if (a.method < 0)
+				return usage_error("unknown method '%s' (separable, "
+				                   "reference)", optarg);
+			break;
+		case 'c':
+			a.compression = lookup(optarg, compression_names, 8);
+			if (a.compression < 0)
+				return usage_error("unknown compression '%s'", optarg);
+			break;
+		case 'r':
+			errno = 0;
+			a.radius_scale = strtod(optarg, &end);
+			if (*end || end == optarg || errno || !(a.radius_scale >= 0) ||
+			    a.radius_scale > 1e30)
+				return usage_error("--radius-scale '%s' must be a number "
+				                   ">= 0", optarg);
+			break;
+		case 't':
+			errno = 0;
+			a.threads = (int)strtol(optarg, &end, 10);
+			if (*end || end == optarg || errno || a.threads < 0 ||
+			    a.threads > 256)
+				return usage_error("--threads '%s' must be 0..256", optarg);
+			break;
+		case 'S':
+			if (sscanf(optarg, "%dx%d", &a.max_w, &a.max_h) != 2 ||
+			    a.max_w < 1 || a.max_h < 1)
+				return usage_error("--max-size '%s' must be WIDTHxHEIGHT",
+				                   optarg);
+			break;
+		default:
+			fprintf(stderr, "Try 'sss --help'.\n");
+			return 2;
+		}
+	}
+	if (optind != argc - 1)
+		return usage_error("%s", optind >= argc
+		                   ? "missing INPUT file"
+		                   : "exactly one INPUT file (use #### and --frames "
+		                     "for sequences)");
+	a.input = argv[optind];
+	if (!a.output)
+		return usage_error("%s", "missing -o OUTPUT");
+	if (!a.scene)
+		return usage_error("%s", "missing --scene SCENE.json (camera and "
+		                         "materials)");
+	int in_seq = strchr(a.input, '#') != NULL;
+	int out_seq = strchr(a.output, '#') != NULL;
+	if (in_seq != out_seq)
+		return usage_error("%s", "INPUT and OUTPUT must both be #### "
+		                         "patterns, or neither");
+	if (in_seq && !a.frames)
+		return usage_error("%s", "a #### pattern needs --frames");
+	if (!in_seq && a.frames)
+		return usage_error("%s", "--frames needs #### patterns");
+
+	frame_list frames = {NULL, 0};
+	int single = 0;
+	if (a.frames) {
+		if (parse_frames(a.frames, &frames))
+			return usage_error("bad --frames '%s' (like 1-240, 1-240x2, "
+			                   "7,9,12-20)", a.frames);
+	} else {
+		frames.frames = &single;
+		frames.count = 1;
+	}
+
+	char err[10240], warn[4096] = "";
+	sss_scene *scene = NULL;
+	sss_result r = sss_scene_load(a.scene, &scene, warn, sizeof warn, err,
+	                              sizeof err);
+	if (warn[0])
+		fprintf(stderr, "sss: %s%s", warn,
+		        warn[strlen(warn) - 1] == '\n' ? "" : "\n");
+	if (r) {
+		fprintf(stderr, "sss: %s\n", err);
+		if (frames.frames != &single)
+			free(frames.frames);
+		return 2;
+	}
+
+	int failed = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
+	                      frames.count > 1;
+	timings total = {0, 0, 0};
+	for (int i = 0; i < frames.count; i++) {
+		char in[4096], out[4096];
+		int f = frames.frames[i];
+		timings t = {0, 0, 0};
+		int bad = 0;
+		if (expand(a.input, f, in, sizeof in) ||
+		    expand(a.output, f, out, sizeof out)) {
+			snprintf(err, sizeof err, "frame %d: path too long", f);
+			bad = 1;
+		} else if (same_file(in, out)) {
+			snprintf(err, sizeof err, "%s: output is the input file; "
+			         "refusing to overwrite it", in);
+			bad = 1;
+		} else {
+			bad = process_frame(&a, scene, in, out, &t, err, sizeof err);
+		}
+		if (bar)
+			fputc('\r', stderr);
+		if (bad) {
+			failed++;
+			fprintf(stderr, "sss: error: %s\n", err);
+		} else if (!a.quiet) {
+			printf("%s -> %s: read %.3f s, sss %.3f s, write %.3f s\n", in,
+			       out, t.read, t.sss, t.write);
+			fflush(stdout);
+		}
+		total.read += t.read;
+		total.sss += t.sss;
+		total.write += t.write;
+		if (bar)
+			progress_bar(i + 1, frames.count, failed);
+	}
+	if (!a.quiet && frames.count > 1)
+		printf("%d frames: %d written, %d failed; read %.2f s, sss %.2f s, "
+		       "write %.2f s\n", frames.count, frames.count - failed, failed,
+		       total.read, total.sss, total.write);
+	sss_scene_free(scene);
+	if (frames.frames != &single)
+		free(frames.frames);
+	return failed ? 1 : 0;
+}
