@@ -389,6 +389,35 @@ SSS_API const sss_material *sss_scene_materials(const sss_scene *scene,
 SSS_API const char *sss_scene_material_name(const sss_scene *scene,
                                             int32_t i);
 
+/* ------------------------------------------------------- one EXR frame
+ * (sss_process.c): what the `sss` command and the add-on run per frame:
+ * read, find the layer's passes, scatter, add the SSS layer (Combined
+ * RGBA, DiffLight RGB), write atomically. */
+
+typedef struct sss_process_options {
+	uint32_t struct_size;
+	const char *layer;     /* view layer, NULL = first with DiffDir */
+	int32_t method;        /* sss_method, or -1 = the scene's */
+	float radius_scale;    /* >= 0, multiplies the scene's (default 1) */
+	int32_t num_threads;   /* 0..256, or -1 = the scene's */
+	sss_exr_options exr;   /* size caps and output compression */
+} sss_process_options;
+
+typedef struct sss_timings {
+	double read, scatter, write; /* seconds */
+} sss_timings;
+
+SSS_API void sss_process_options_default(sss_process_options *opt);
+
+/* Errors name the file (and layer); a Depth pass without one finite
+ * positive value is an error (a broken file), as is an output path that
+ * is the input file. timings may be NULL. */
+SSS_API sss_result sss_process_exr(const char *input, const char *output,
+                                   const sss_scene *scene,
+                                   const sss_process_options *opt,
+                                   sss_timings *timings, char *errbuf,
+                                   size_t errbuf_len);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,8 +9,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 static const char usage_text[] =
@@ -62,13 +60,6 @@ typedef struct args {
 	int max_w, max_h;
 	int quiet;
 } args;
-
-static double now(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 static int usage_error(const char *fmt, const char *what)
 {
@@ -158,111 +149,6 @@ static int expand(const char *pattern, int frame, char *out, size_t len)
 	int n = snprintf(out, len, "%.*s%0*d%s", (int)(hash - pattern), pattern,
 	                 width, frame, hash + width);
 	return n >= 0 && (size_t)n < len ? 0 : -1;
-}
-
-/* ------------------------------------------------------------ one frame */
-
-typedef struct timings {
-	double read, sss, write;
-} timings;
-
-static int has_usable_depth(const sss_image *depth)
-{
-	int64_t stride = depth->row_stride ? depth->row_stride
-	                 : (int64_t)depth->width * depth->channels;
-	for (int32_t y = 0; y < depth->height; y++)
-		for (int32_t x = 0; x < depth->width; x++) {
-			float z = depth->data[y * stride + (int64_t)x * depth->channels];
-			if (z > 0.0f && z < 3.0e38f)
-				return 1;
-		}
-	return 0;
-}
-
-static int process_frame(const args *a, const sss_scene *scene,
-                         const char *in, const char *out, timings *t,
-                         char *err, size_t errlen)
-{
-	sss_exr_options xo;
-	sss_exr_options_default(&xo);
-	xo.max_width = a->max_w;
-	xo.max_height = a->max_h;
-	if (a->compression >= 0)
-		xo.compression = a->compression;
-	sss_exr *exr = NULL;
-	float *combined = NULL, *light = NULL;
-	int rc = 1;
-
-	double t0 = now();
-	if (sss_exr_read(in, &xo, &exr, err, errlen))
-		goto done;
-	t->read = now() - t0;
-
-	sss_passes passes;
-	const char *layer = NULL;
-	if (sss_exr_render_passes(exr, a->layer, &passes, &layer, err, errlen))
-		goto done;
-	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
-	size_t n = (size_t)w * (size_t)h;
-	/* The library passes pixels with a bad depth through, one by one; a
-	 * Depth pass without a single usable value is a broken file. */
-	if (!has_usable_depth(&passes.depth)) {
-		snprintf(err, errlen, "%s (layer '%s'): the Depth pass has no "
-		         "finite positive value (NaN-filled or empty)", in, layer);
-		goto done;
-	}
-	combined = malloc(n * 4 * sizeof *combined);
-	light = malloc(n * 3 * sizeof *light);
-	if (!combined || !light) {
-		snprintf(err, errlen, "%s: out of memory for a %dx%d frame", in, w,
-		         h);
-		goto done;
-	}
-	sss_options opt = *sss_scene_options(scene);
-	if (a->method >= 0)
-		opt.method = a->method;
-	if (a->threads >= 0)
-		opt.num_threads = a->threads;
-	opt.radius_scale = (float)(opt.radius_scale * a->radius_scale);
-	int32_t count;
-	const sss_material *mats = sss_scene_materials(scene, &count);
-	sss_image oc = {combined, w, h, 4, 0}, ol = {light, w, h, 3, 0};
-	char detail[512];
-	t0 = now();
-	sss_result r = sss_apply(&passes, sss_scene_camera(scene), mats, count,
-	                         &opt, &oc, &ol, detail, sizeof detail);
-	t->sss = now() - t0;
-	if (r) {
-		snprintf(err, errlen, "%s (layer '%s'): %s: %s", in, layer,
-		         sss_status_string(r), detail);
-		goto done;
-	}
-
-	t0 = now();
-	if (sss_exr_add_pass(exr, "SSS", "Combined", "RGBA", combined, err,
-	                     errlen) ||
-	    sss_exr_add_pass(exr, "SSS", "DiffLight", "RGB", light, err,
-	                     errlen) ||
-	    sss_exr_write(exr, out, &xo, err, errlen))
-		goto done;
-	t->write = now() - t0;
-	rc = 0;
-done:
-	free(combined);
-	free(light);
-	sss_exr_free(exr);
-	return rc;
-}
-
-/* Same file, by name or by inode: never write over an input. */
-static int same_file(const char *a, const char *b)
-{
-	struct stat sa, sb;
-	if (strcmp(a, b) == 0)
-		return 1;
-	if (stat(a, &sa) || stat(b, &sb))
-		return 0;
-	return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
 static void progress_bar(int done, int total, int failed)
@@ -394,22 +280,29 @@ int main(int argc, char **argv)
 
 	int failed = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
 	                      frames.count > 1;
-	timings total = {0, 0, 0};
+	sss_process_options po;
+	sss_process_options_default(&po);
+	po.layer = a.layer;
+	po.method = a.method;
+	po.num_threads = a.threads;
+	po.radius_scale = (float)a.radius_scale;
+	po.exr.max_width = a.max_w;
+	po.exr.max_height = a.max_h;
+	if (a.compression >= 0)
+		po.exr.compression = a.compression;
+	sss_timings total = {0, 0, 0};
 	for (int i = 0; i < frames.count; i++) {
 		char in[4096], out[4096];
 		int f = frames.frames[i];
-		timings t = {0, 0, 0};
+		sss_timings t = {0, 0, 0};
 		int bad = 0;
 		if (expand(a.input, f, in, sizeof in) ||
 		    expand(a.output, f, out, sizeof out)) {
 			snprintf(err, sizeof err, "frame %d: path too long", f);
 			bad = 1;
-		} else if (same_file(in, out)) {
-			snprintf(err, sizeof err, "%s: output is the input file; "
-			         "refusing to overwrite it", in);
-			bad = 1;
 		} else {
-			bad = process_frame(&a, scene, in, out, &t, err, sizeof err);
+			bad = sss_process_exr(in, out, scene, &po, &t, err,
+			                      sizeof err) != SSS_OK;
 		}
 		if (bar)
 			fputc('\r', stderr);
@@ -418,11 +311,11 @@ int main(int argc, char **argv)
 			fprintf(stderr, "sss: error: %s\n", err);
 		} else if (!a.quiet) {
 			printf("%s -> %s: read %.3f s, sss %.3f s, write %.3f s\n", in,
-			       out, t.read, t.sss, t.write);
+			       out, t.read, t.scatter, t.write);
 			fflush(stdout);
 		}
 		total.read += t.read;
-		total.sss += t.sss;
+		total.scatter += t.scatter;
 		total.write += t.write;
 		if (bar)
 			progress_bar(i + 1, frames.count, failed);
@@ -430,7 +323,7 @@ int main(int argc, char **argv)
 	if (!a.quiet && frames.count > 1)
 		printf("%d frames: %d written, %d failed; read %.2f s, sss %.2f s, "
 		       "write %.2f s\n", frames.count, frames.count - failed, failed,
-		       total.read, total.sss, total.write);
+		       total.read, total.scatter, total.write);
 	sss_scene_free(scene);
 	if (frames.frames != &single)
 		free(frames.frames);

@@ -112,6 +112,8 @@ size_t sss_struct_size(const char *name)
 		{"sss_material", sizeof(sss_material)},
 		{"sss_options", sizeof(sss_options)},
 		{"sss_exr_options", sizeof(sss_exr_options)},
+		{"sss_process_options", sizeof(sss_process_options)},
+		{"sss_timings", sizeof(sss_timings)},
 	};
 	if (!name)
 		return 0;

@@ -1,0 +1,149 @@
+/* sss_process.c - one EXR frame end to end: read, scatter, add the SSS
+ * layer, write. Shared by the `sss` command and the Blender add-on so that
+ * both take exactly the same path. */
+#include "sss_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+static double now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+void sss_process_options_default(sss_process_options *opt)
+{
+	if (!opt)
+		return;
+	memset(opt, 0, sizeof *opt);
+	opt->struct_size = sizeof *opt;
+	opt->method = -1;
+	opt->radius_scale = 1.0f;
+	opt->num_threads = -1;
+	sss_exr_options_default(&opt->exr);
+}
+
+/* The library passes pixels with a bad depth through one by one; a Depth
+ * pass without a single usable value is a broken file. */
+static int has_usable_depth(const sss_image *depth)
+{
+	int64_t stride = depth->row_stride ? depth->row_stride
+	                 : (int64_t)depth->width * depth->channels;
+	for (int32_t y = 0; y < depth->height; y++)
+		for (int32_t x = 0; x < depth->width; x++) {
+			float z = depth->data[y * stride + (int64_t)x * depth->channels];
+			if (z > 0.0f && z < 3.0e38f)
+				return 1;
+		}
+	return 0;
+}
+
+/* Same file, by name or by inode: never write over an input. */
+static int same_file(const char *a, const char *b)
+{
+	struct stat sa, sb;
+	if (strcmp(a, b) == 0)
+		return 1;
+	if (stat(a, &sa) || stat(b, &sb))
+		return 0;
+	return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+sss_result sss_process_exr(const char *in, const char *out,
+                           const sss_scene *scene,
+                           const sss_process_options *user_opt,
+                           sss_timings *timings, char *err, size_t errlen)
+{
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	if (user_opt)
+		opt = *user_opt;
+	if (err && errlen)
+		err[0] = '\0';
+	if (!in || !out || !scene)
+		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
+		                 "input, output and scene are required");
+	if (opt.struct_size != sizeof opt)
+		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
+		                 "process options: struct_size %u, expected %zu",
+		                 opt.struct_size, sizeof opt);
+	if (!(isfinite(opt.radius_scale) && opt.radius_scale >= 0.0f))
+		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
+		                 "radius scale %g must be finite and >= 0",
+		                 (double)opt.radius_scale);
+	if (same_file(in, out))
+		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
+		                 "%s: output is the input file; refusing to "
+		                 "overwrite it", in);
+
+	sss_timings t = {0, 0, 0};
+	sss_exr *exr = NULL;
+	float *combined = NULL, *light = NULL;
+	sss_result r;
+
+	double t0 = now();
+	if ((r = sss_exr_read(in, &opt.exr, &exr, err, errlen)))
+		goto done;
+	t.read = now() - t0;
+
+	sss_passes passes;
+	const char *layer = NULL;
+	if ((r = sss_exr_render_passes(exr, opt.layer, &passes, &layer, err,
+	                               errlen)))
+		goto done;
+	if (!has_usable_depth(&passes.depth)) {
+		r = sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
+		              "%s (layer '%s'): the Depth pass has no finite "
+		              "positive value (NaN-filled or empty)", in, layer);
+		goto done;
+	}
+	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
+	size_t n = (size_t)w * (size_t)h;
+	combined = malloc(n * 4 * sizeof *combined);
+	light = malloc(n * 3 * sizeof *light);
+	if (!combined || !light) {
+		r = sss__fail(err, errlen, SSS_ERR_OUT_OF_MEMORY, "%s: out of "
+		              "memory for a %dx%d frame", in, w, h);
+		goto done;
+	}
+
+	sss_options o = *sss_scene_options(scene);
+	if (opt.method >= 0)
+		o.method = opt.method;
+	if (opt.num_threads >= 0)
+		o.num_threads = opt.num_threads;
+	o.radius_scale = o.radius_scale * opt.radius_scale;
+	int32_t count;
+	const sss_material *mats = sss_scene_materials(scene, &count);
+	sss_image oc = {combined, w, h, 4, 0}, ol = {light, w, h, 3, 0};
+	char detail[512];
+	t0 = now();
+	r = sss_apply(&passes, sss_scene_camera(scene), mats, count, &o, &oc, &ol,
+	              detail, sizeof detail);
+	t.scatter = now() - t0;
+	if (r) {
+		sss__fail(err, errlen, r, "%s (layer '%s'): %s: %s", in, layer,
+		          sss_status_string(r), detail);
+		goto done;
+	}
+
+	t0 = now();
+	if ((r = sss_exr_add_pass(exr, "SSS", "Combined", "RGBA", combined, err,
+	                          errlen)) ||
+	    (r = sss_exr_add_pass(exr, "SSS", "DiffLight", "RGB", light, err,
+	                          errlen)) ||
+	    (r = sss_exr_write(exr, out, &opt.exr, err, errlen)))
+		goto done;
+	t.write = now() - t0;
+done:
+	if (timings)
+		*timings = t;
+	free(combined);
+	free(light);
+	sss_exr_free(exr);
+	return r;
+}
