@@ -28,7 +28,7 @@ LIB_HDR   := csrc/sss.h csrc/sss_internal.h
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 
-.PHONY: all deps test check demo report clean
+.PHONY: all deps test check demo demo-c report addon blender-test clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -54,9 +54,10 @@ deps:
 # python3 on PATH may be another one without them).
 PYTHON ?= /usr/bin/python3
 
-test: deps all $(TESTS)
+test: deps all $(TESTS) addon
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
+	@$(MAKE) --no-print-directory blender-test
 	@if sh scripts/sanitizers-supported.sh "$(CC)"; then \
 		$(MAKE) --no-print-directory check; \
 	else echo "make check: skipped ($(CC) cannot build with ASan+UBSan here)"; fi
@@ -76,12 +77,49 @@ check:
 		sh tests/run_c_tests.sh $(BUILD)/check \
 		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS))
 
+# The add-on as Blender installs it: module separable_sss with the library
+# inside (Edit > Preferences > Add-ons > Install...).
+ADDON_FILES := $(sort $(wildcard addon/separable_sss/*.py addon/separable_sss/presets/*/*.py))
+addon: $(BUILD)/separable_sss.zip
+$(BUILD)/separable_sss.zip: $(ADDON_FILES) $(BUILD)/libsss.so
+	@rm -rf $(BUILD)/addon && mkdir -p $(BUILD)/addon
+	@cp -r addon/separable_sss $(BUILD)/addon/
+	@find $(BUILD)/addon -name __pycache__ -prune -exec rm -rf {} +
+	@cp $(BUILD)/libsss.so $(BUILD)/addon/separable_sss/
+	@rm -f $@.tmp && cd $(BUILD)/addon && $(PYTHON) -m zipfile -c ../separable_sss.zip.tmp separable_sss
+	@mv $@.tmp $@ && echo "add-on: $@"
+
+# Blender's own Python runs these (they import bpy); each file in its own
+# Blender process, with an empty user scripts folder.
+BLENDER ?= blender
+BLENDER_TESTS := $(sort $(wildcard tests/blender/test_*.py))
+blender-test: all addon
+	@bash scripts/blender-tests.sh $(BLENDER) $(abspath $(BUILD)) $(BLENDER_TESTS)
+
 $(BUILD)/sss-demo: examples/demo.c tests/synth.h $(BUILD)/libsss.so
 	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \
 		examples/demo.c -L$(BUILD) -lsss -Wl,-rpath,'$$ORIGIN' -lpng $(LDLIBS)
 
-demo: deps $(BUILD)/sss-demo
-	@$(BUILD)/sss-demo $(BUILD)/demo
+# The demo: a head-sized object with a skin material lit from the side and
+# from behind, rendered headlessly with the add-on's pipeline.
+DEMO_SIZE ?= 400
+DEMO_SAMPLES ?= 32
+demo: deps all
+	@mkdir -p out $(BUILD)/demo
+	@$(BLENDER) -b --factory-startup --python-exit-code 1 \
+		--python blender_scripts/build_scene.py -- --kind demo \
+		--out $(BUILD)/demo/demo.blend --size $(DEMO_SIZE) \
+		--samples $(DEMO_SAMPLES) | grep build_scene
+	@SSS_LIB=$(abspath $(BUILD))/libsss.so $(BLENDER) -b $(BUILD)/demo/demo.blend \
+		--python-exit-code 1 --python blender_scripts/render_sss.py -- \
+		--output $(abspath out)/demo.exr | grep render_sss
+	@$(PYTHON) scripts/side_by_side.py out/demo.exr out/demo.png
+	@echo "demo: wrote $(abspath out)/demo.exr (all passes + SSS layer)"
+	@echo "demo: wrote $(abspath out)/demo.png (left: without SSS, right: with SSS)"
+
+# The same idea without Blender: synthetic passes through the C API.
+demo-c: $(BUILD)/sss-demo
+	@$(BUILD)/sss-demo $(BUILD)/demo-c
 
 $(BUILD)/sss-report: examples/method_report.c tests/synth.h $(BUILD)/libsss.so
 	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \

@@ -1,0 +1,37 @@
+"""Screen-space subsurface scattering for Blender render passes: renders
+with material SSS switched off, scatters the diffuse light with libsss and
+brings the result back into the compositor."""
+
+bl_info = {
+    "name": "Separable SSS",
+    "author": "libsss developers",
+    "version": (0, 1, 0),
+    "blender": (3, 4, 0),
+    "location": "Node Editor > Sidebar > SSS; Material Properties",
+    "description": "Fast screen-space subsurface scattering as a "
+                   "post-process on Cycles render passes",
+    "category": "Compositing",
+}
+
+if "bpy" in locals():
+    import importlib
+    for _m in (native, analysis, switch_off, nodes, pipeline,  # noqa: F821
+               properties, presets, operators, ui, handlers):  # noqa: F821
+        importlib.reload(_m)
+
+import bpy  # noqa: E402,F401
+
+from . import (analysis, handlers, native, nodes, operators,  # noqa: E402
+               pipeline, presets, properties, switch_off, ui)
+
+_modules = (properties, presets, operators, ui, handlers)
+
+
+def register():
+    for module in _modules:
+        module.register()
+
+
+def unregister():
+    for module in reversed(_modules):
+        module.unregister()

@@ -1,0 +1,177 @@
+"""The add-on's only ctypes module: loads libsss once, declares every
+signature it uses, checks the ABI and struct sizes, and turns status codes
+into exceptions with the library's own messages."""
+import ctypes
+import os
+import threading
+
+ABI_VERSION = 1  # must match SSS_ABI_VERSION in csrc/sss.h
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+class LibraryError(Exception):
+    """A libsss call failed; str() is the library's message."""
+
+    def __init__(self, code, name, message):
+        super().__init__(message)
+        self.code = code
+        self.name = name
+
+
+class ExrOptions(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32),
+                ("max_width", ctypes.c_int32),
+                ("max_height", ctypes.c_int32),
+                ("max_pixels", ctypes.c_int64),
+                ("compression", ctypes.c_int32),
+                ("num_threads", ctypes.c_int32)]
+
+
+class ProcessOptions(ctypes.Structure):
+    _fields_ = [("struct_size", ctypes.c_uint32),
+                ("layer", ctypes.c_char_p),
+                ("method", ctypes.c_int32),
+                ("radius_scale", ctypes.c_float),
+                ("num_threads", ctypes.c_int32),
+                ("exr", ExrOptions)]
+
+
+class Timings(ctypes.Structure):
+    _fields_ = [("read", ctypes.c_double), ("scatter", ctypes.c_double),
+                ("write", ctypes.c_double)]
+
+
+def candidates():
+    """Where the library may be: $SSS_LIB, beside this file (the installed
+    zip), or the checkout's build folder (running from the repository)."""
+    env = os.environ.get("SSS_LIB")
+    if env:
+        yield env
+    yield os.path.join(_HERE, "libsss.so")
+    yield os.path.normpath(os.path.join(_HERE, "..", "..", "build",
+                                        "libsss.so"))
+
+
+_lib = None
+_lock = threading.Lock()
+
+
+def _declare(lib):
+    c = ctypes
+    sig = {
+        "sss_abi_version": (c.c_uint32, []),
+        "sss_version_string": (c.c_char_p, []),
+        "sss_status_name": (c.c_char_p, [c.c_int32]),
+        "sss_status_string": (c.c_char_p, [c.c_int32]),
+        "sss_struct_size": (c.c_size_t, [c.c_char_p]),
+        "sss_scene_load": (c.c_int32, [c.c_char_p, c.POINTER(c.c_void_p),
+                                       c.c_char_p, c.c_size_t, c.c_char_p,
+                                       c.c_size_t]),
+        "sss_scene_free": (None, [c.c_void_p]),
+        "sss_process_options_default": (None,
+                                        [c.POINTER(ProcessOptions)]),
+        "sss_process_exr": (c.c_int32, [c.c_char_p, c.c_char_p, c.c_void_p,
+                                        c.POINTER(ProcessOptions),
+                                        c.POINTER(Timings), c.c_char_p,
+                                        c.c_size_t]),
+    }
+    for name, (restype, argtypes) in sig.items():
+        fn = getattr(lib, name)
+        fn.restype = restype
+        fn.argtypes = argtypes
+
+
+def library():
+    """The loaded library; raises LibraryError with what was tried."""
+    global _lib
+    with _lock:
+        if _lib is not None:
+            return _lib
+        tried = []
+        for path in candidates():
+            if not os.path.exists(path):
+                tried.append(f"{path} (missing)")
+                continue
+            try:
+                lib = ctypes.CDLL(path)
+                _declare(lib)
+            except (OSError, AttributeError) as e:
+                tried.append(f"{path} ({e})")
+                continue
+            if lib.sss_abi_version() != ABI_VERSION:
+                tried.append(f"{path} (ABI {lib.sss_abi_version()}, add-on "
+                             f"needs {ABI_VERSION})")
+                continue
+            for struct, cls in (("sss_exr_options", ExrOptions),
+                                ("sss_process_options", ProcessOptions),
+                                ("sss_timings", Timings)):
+                if lib.sss_struct_size(struct.encode()) != ctypes.sizeof(cls):
+                    raise LibraryError(-1, "ABI", f"{path}: {struct} layout "
+                                       "differs from the add-on's")
+            _lib = lib
+            return lib
+        raise LibraryError(-1, "NOT_FOUND", "libsss not found: " +
+                           "; ".join(tried) + " (run make, or set SSS_LIB)")
+
+
+def version():
+    return library().sss_version_string().decode()
+
+
+def _check(code, detail):
+    if code != 0:
+        lib = library()
+        message = detail.value.decode(errors="replace") or \
+            lib.sss_status_string(code).decode()
+        raise LibraryError(code, lib.sss_status_name(code).decode(), message)
+
+
+class Scene:
+    """A loaded scene description (JSON); use as a context manager."""
+
+    def __init__(self, path):
+        lib = library()
+        self._ptr = ctypes.c_void_p()
+        warn = ctypes.create_string_buffer(4096)
+        err = ctypes.create_string_buffer(4096)
+        code = lib.sss_scene_load(os.fsencode(path), ctypes.byref(self._ptr),
+                                  warn, len(warn), err, len(err))
+        self.warnings = [w for w in warn.value.decode(errors="replace")
+                         .splitlines() if w]
+        _check(code, err)
+
+    def close(self):
+        if self._ptr:
+            library().sss_scene_free(self._ptr)
+            self._ptr = ctypes.c_void_p()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def process(self, input_exr, output_exr, *, method=None,
+                radius_scale=1.0, threads=None, layer=None):
+        """One frame through the library; returns the timings as a dict.
+        Releases the GIL for the duration (ctypes does)."""
+        lib = library()
+        opt = ProcessOptions()
+        lib.sss_process_options_default(ctypes.byref(opt))
+        if method is not None:
+            opt.method = method
+        opt.radius_scale = radius_scale
+        if threads is not None:
+            opt.num_threads = threads
+        if layer:
+            opt.layer = layer.encode()
+        timings = Timings()
+        err = ctypes.create_string_buffer(4096)
+        code = lib.sss_process_exr(os.fsencode(input_exr),
+                                   os.fsencode(output_exr), self._ptr,
+                                   ctypes.byref(opt), ctypes.byref(timings),
+                                   err, len(err))
+        _check(code, err)
+        return {"read": timings.read, "scatter": timings.scatter,
+                "write": timings.write}

@@ -1,0 +1,329 @@
+"""Operators: render with SSS, apply SSS to the last render, remove the
+compositor set-up, give scattering materials pass indices.
+
+Rendering and loading the result run on the main thread; the library runs
+in a worker thread while a modal timer keeps the UI alive and shows
+progress. Headless (blender -b) everything runs in order, because modal
+timers do not run there."""
+import threading
+import time
+
+import bpy
+
+from . import nodes, pipeline
+
+# Only one run at a time: its worker thread, alive while the library runs
+# (also after an Esc, until the library returns).
+_worker = None
+
+
+def _busy():
+    return _worker is not None and _worker.is_alive()
+
+
+def _one_line(ex):
+    """An exception as one line for the report (never a traceback)."""
+    lines = str(ex).strip().splitlines()
+    first = lines[0] if lines else ""
+    if isinstance(ex, pipeline.SSSError):
+        return first or "SSS failed"
+    return "Unexpected error: %s%s" % (type(ex).__name__,
+                                       ": " + first if first else "")
+
+
+def _done_text(job, image):
+    path = job.output_exr or (image.filepath if image else "")
+    parts = [job.summary] if job.summary else []
+    parts.append(pipeline.timings_text(job))
+    return "SSS done (%s): %s" % ("; ".join(parts), path)
+
+
+def _redraw(context):
+    screen = getattr(context, "screen", None)
+    if screen is None:
+        return
+    for area in screen.areas:
+        if area.type in {'NODE_EDITOR', 'IMAGE_EDITOR', 'PROPERTIES'}:
+            area.tag_redraw()
+
+
+def _poll_common(cls, context):
+    scene = context.scene
+    if scene is None or getattr(scene, "sss", None) is None:
+        cls.poll_message_set("No scene")
+        return False
+    if _busy():
+        cls.poll_message_set("An SSS run is in progress")
+        return False
+    if scene.camera is None:
+        cls.poll_message_set("The scene has no camera")
+        return False
+    if scene.render.engine != 'CYCLES':
+        cls.poll_message_set("Switch the render engine to Cycles: the "
+                             "library needs its Material Index pass")
+        return False
+    return True
+
+
+class _Run:
+    """State shared with the worker thread: no bpy in here."""
+
+    def __init__(self, job):
+        self.job = job
+        self.error = None
+        self.started = time.monotonic()
+
+    def __call__(self):
+        try:
+            pipeline.scatter(self.job)
+        except Exception as ex:   # reported on the main thread
+            self.error = ex
+
+
+class _SSSRunBase:
+    """Shared by Render with SSS and Apply SSS to Last Render: subclasses
+    define prepare(context) -> pipeline.Job (main thread)."""
+    bl_options = {'REGISTER'}
+    prepare = None  # subclasses: prepare(context) -> pipeline.Job
+
+    def _nothing_to_do(self, context):
+        """A scene where nothing scatters is left alone, and we say so."""
+        if pipeline.analyse(context.scene).found:
+            return False
+        self.report({'WARNING'}, "No material scatters: nothing to do; "
+                    "the render is left alone")
+        return True
+
+    # -- headless, or called from a script: everything in order
+    def execute(self, context):
+        try:
+            if self._nothing_to_do(context):
+                return {'CANCELLED'}
+            nothing = False
+            job = self.prepare(context)
+            pipeline.scatter(job)
+            image = pipeline.finish(context, job)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        self._report_done(job, image, nothing)
+        return {'FINISHED'}
+
+    # -- interactive: the library runs in a worker thread
+    def invoke(self, context, _event):
+        global _worker
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        try:
+            if self._nothing_to_do(context):
+                return {'CANCELLED'}
+            self._nothing = False
+            job = self.prepare(context)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        self._scene_name = context.scene.name
+        self._run = _Run(job)
+        _worker = threading.Thread(target=self._run, name="sss-scatter",
+                                   daemon=True)
+        _worker.start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.modal_handler_add(self)
+        wm.progress_begin(0, 100)
+        self._status(context, "Scattering (Esc: stop waiting)")
+        return {'RUNNING_MODAL'}
+
+    def modal(self, context, event):
+        if event.type == 'ESC' and event.value == 'PRESS':
+            self._cleanup(context)
+            self.report({'WARNING'}, "SSS: stopped waiting; the running "
+                        "library call finishes in the background and its "
+                        "result is not loaded")
+            return {'CANCELLED'}
+        if event.type != 'TIMER':
+            return {'PASS_THROUGH'}
+        if _worker is not None and _worker.is_alive():
+            elapsed = time.monotonic() - self._run.started
+            # No progress callback from the library: a curve that creeps
+            # towards 95 % shows that it is alive.
+            context.window_manager.progress_update(
+                int(95.0 * (1.0 - 1.0 / (1.0 + elapsed / 3.0))))
+            self._status(context, "Scattering: %.1f s" % elapsed)
+            return {'PASS_THROUGH'}
+        self._cleanup(context)
+        if self._run.error is not None:
+            self.report({'ERROR'}, _one_line(self._run.error))
+            return {'CANCELLED'}
+        return self._finish(context)
+
+    def cancel(self, context):
+        # Window closed or file loaded while running.
+        self._cleanup(context)
+
+    def _finish(self, context):
+        scene = bpy.data.scenes.get(self._scene_name)
+        if scene is None:
+            self.report({'ERROR'}, "SSS: the scene %r is gone; the result "
+                        "is in %s" % (self._scene_name,
+                                      self._run.job.output_exr))
+            return {'CANCELLED'}
+        try:
+            if scene == context.scene:
+                image = pipeline.finish(context, self._run.job)
+            else:   # the user switched scenes meanwhile
+                with context.temp_override(scene=scene):
+                    image = pipeline.finish(bpy.context, self._run.job)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        self._report_done(self._run.job, image, self._nothing)
+        _redraw(context)
+        return {'FINISHED'}
+
+    def _status(self, context, text):
+        workspace = getattr(context, "workspace", None)
+        if workspace is not None:
+            workspace.status_text_set("SSS: " + text)
+
+    def _cleanup(self, context):
+        wm = context.window_manager
+        timer = getattr(self, "_timer", None)
+        if timer is not None:
+            wm.event_timer_remove(timer)
+            self._timer = None
+        wm.progress_end()
+        workspace = getattr(context, "workspace", None)
+        if workspace is not None:
+            workspace.status_text_set(None)
+
+    def _report_done(self, job, image, nothing):
+        if nothing:
+            self.report({'WARNING'}, "No material scatters: the result is "
+                        "the render recombined from its passes")
+        self.report({'INFO'}, _done_text(job, image))
+
+
+class SSS_OT_render(_SSSRunBase, bpy.types.Operator):
+    """Render the current frame with material SSS off, scatter its diffuse
+    light with the library and show the result in the compositor"""
+    bl_idname = "sss.render"
+    bl_label = "Render with SSS"
+
+    @classmethod
+    def poll(cls, context):
+        return _poll_common(cls, context)
+
+    def prepare(self, context):
+        return pipeline.prepare_render(context)
+
+
+class SSS_OT_apply(_SSSRunBase, bpy.types.Operator):
+    """Scatter the diffuse light of the existing render (it must hold the
+    diffuse, depth and material index passes) without rendering again"""
+    bl_idname = "sss.apply"
+    bl_label = "Apply SSS to Last Render"
+
+    @classmethod
+    def poll(cls, context):
+        if not _poll_common(cls, context):
+            return False
+        if bpy.data.images.get("Render Result") is None:
+            cls.poll_message_set("There is no render yet: render first")
+            return False
+        return True
+
+    def prepare(self, context):
+        return pipeline.prepare_last_render(context)
+
+
+class SSS_OT_remove_setup(bpy.types.Operator):
+    """Remove the SSS nodes from the compositor; the Render Layers image
+    goes back into the Composite output"""
+    bl_idname = "sss.remove_setup"
+    bl_label = "Remove SSS Nodes"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    @classmethod
+    def poll(cls, context):
+        scene = context.scene
+        if scene is None or scene.node_tree is None or \
+                nodes.find_result(scene) is None:
+            cls.poll_message_set("There are no SSS nodes in the compositor")
+            return False
+        return True
+
+    def execute(self, context):
+        try:
+            count = nodes.remove_setup(context.scene)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        self.report({'INFO'}, "Removed %d SSS node(s)" % count)
+        return {'FINISHED'}
+
+
+class SSS_OT_assign_pass_indices(bpy.types.Operator):
+    """Give every scattering material a pass index of its own (renders do
+    this for the time of the render only): keeps indices stable for farm
+    renders with a hand-written scene description"""
+    bl_idname = "sss.assign_pass_indices"
+    bl_label = "Assign Pass Indices"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or getattr(context.scene, "sss",
+                                            None) is None:
+            cls.poll_message_set("No scene")
+            return False
+        return True
+
+    def execute(self, context):
+        try:
+            found = pipeline.analyse(context.scene).found
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        if not found:
+            self.report({'WARNING'}, "No material scatters")
+            return {'CANCELLED'}
+        scattering = {f.material for f in found}
+        # Indices of other materials are off limits: their pixels would
+        # scatter with this profile.
+        taken = {m.pass_index for m in bpy.data.materials
+                 if m not in scattering and m.pass_index}
+        used = set()
+        changed = []
+        next_index = max(taken | {m.pass_index for m in scattering} |
+                         {0}) + 1
+        for f in found:
+            mat = f.material
+            if mat.pass_index and mat.pass_index not in taken and \
+                    mat.pass_index not in used:
+                used.add(mat.pass_index)
+                continue
+            mat.pass_index = next_index
+            used.add(next_index)
+            changed.append("%s: %d" % (mat.name, next_index))
+            next_index += 1
+        if changed:
+            self.report({'INFO'}, "Pass indices: " + ", ".join(changed))
+        else:
+            self.report({'INFO'}, "Every scattering material already has "
+                        "a pass index of its own")
+        return {'FINISHED'}
+
+
+classes = (SSS_OT_render, SSS_OT_apply, SSS_OT_remove_setup,
+           SSS_OT_assign_pass_indices)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

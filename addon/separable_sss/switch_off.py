@@ -1,0 +1,174 @@
+"""Render with material SSS switched off, without changing the look, and
+put everything back exactly afterwards, also after an error or a cancelled
+render.
+
+In Blender 3.x the Principled BSDF's diffuse colour is
+mix(Base Color, Subsurface Color, Subsurface): for the render, Base Color
+becomes that mix (a Mix node when any of the three is linked to a texture;
+nothing is baked) and Subsurface becomes 0. A Subsurface Scattering node is
+replaced by a Diffuse BSDF of the same colour and normal. The passes the
+library reads are enabled on every view layer, and scattering materials
+without a pass index get a free one."""
+from contextlib import contextmanager
+
+import bpy
+
+PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
+          "glossy_direct", "glossy_indirect", "glossy_color", "z",
+          "material_index")
+OPTIONAL_PASSES = {"emit": "emits", "environment": None,
+                   "transmission_direct": "transmits",
+                   "transmission_indirect": "transmits",
+                   "transmission_color": "transmits", "position": None}
+
+TAG = "SSS switch-off"  # label of every node we add
+
+
+class _Undo:
+    """A list of closures that put things back, run in reverse order."""
+
+    def __init__(self):
+        self.steps = []
+
+    def set(self, obj, attr, value):
+        old = getattr(obj, attr)
+        if not isinstance(old, (bool, int, float, str)):
+            old = tuple(old)  # a copy, not a view of the property
+        self.steps.append(lambda: setattr(obj, attr, old))
+        setattr(obj, attr, value)
+
+    def add(self, fn):
+        self.steps.append(fn)
+
+    def run(self):
+        errors = []
+        while self.steps:
+            step = self.steps.pop()
+            try:
+                step()
+            except Exception as e:  # keep restoring the rest
+                errors.append(str(e))
+        return errors
+
+
+def _link_source(sock):
+    return sock.links[0].from_socket if sock.is_linked else None
+
+
+def _relink(tree, undo, from_socket, to_socket):
+    link = tree.links.new(from_socket, to_socket)
+    undo.add(lambda: tree.links.remove(link))
+    return link
+
+
+def _unlink(tree, undo, sock):
+    """Removes the link into sock; the undo step recreates it."""
+    if not sock.is_linked:
+        return
+    source = sock.links[0].from_socket
+    tree.links.remove(sock.links[0])
+    undo.add(lambda: tree.links.new(source, sock))
+
+
+def _new_node(tree, undo, kind, location):
+    node = tree.nodes.new(kind)
+    node.label = TAG
+    node.location = location
+    undo.add(lambda: tree.nodes.remove(node))
+    return node
+
+
+def _switch_principled(tree, node, undo):
+    base = node.inputs["Base Color"]
+    sscol = node.inputs["Subsurface Color"]
+    factor = node.inputs["Subsurface"]
+    if not (base.is_linked or sscol.is_linked or factor.is_linked):
+        t = factor.default_value
+        mixed = tuple(b + (s - b) * t for b, s in
+                      zip(base.default_value, sscol.default_value))
+        undo.set(base, "default_value", mixed)
+        undo.set(factor, "default_value", 0.0)
+        return
+    mix = _new_node(tree, undo, "ShaderNodeMixRGB",
+                    (node.location.x - 220, node.location.y))
+    mix.blend_type = "MIX"
+    for src, dst in ((factor, mix.inputs["Fac"]),
+                     (base, mix.inputs["Color1"]),
+                     (sscol, mix.inputs["Color2"])):
+        if src.is_linked:
+            _relink(tree, undo, _link_source(src), dst)
+        else:
+            dst.default_value = src.default_value
+    _unlink(tree, undo, base)
+    _relink(tree, undo, mix.outputs["Color"], base)
+    _unlink(tree, undo, factor)
+    undo.set(factor, "default_value", 0.0)
+
+
+def _switch_sss_node(tree, node, undo):
+    diffuse = _new_node(tree, undo, "ShaderNodeBsdfDiffuse",
+                        (node.location.x, node.location.y - 200))
+    for name in ("Color", "Normal"):
+        src = node.inputs[name]
+        if src.is_linked:
+            _relink(tree, undo, _link_source(src), diffuse.inputs[name])
+        elif name == "Color":
+            diffuse.inputs[name].default_value = src.default_value
+    for link in list(node.outputs[0].links):
+        target = link.to_socket
+        _unlink(tree, undo, target)
+        _relink(tree, undo, diffuse.outputs[0], target)
+
+
+def _free_pass_indices(scene, analysis, undo):
+    used = {m.pass_index for m in bpy.data.materials}
+    next_index = max(used | {0}) + 1
+    for found in analysis.found:
+        if found.material.pass_index == 0:
+            undo.set(found.material, "pass_index", next_index)
+            found.pass_index = next_index
+            next_index += 1
+        else:
+            found.pass_index = found.material.pass_index
+    # Two scattering materials sharing an index would share a profile.
+    seen = {}
+    for found in analysis.found:
+        if found.pass_index in seen and seen[found.pass_index] != \
+                found.material:
+            undo.set(found.material, "pass_index", next_index)
+            found.pass_index = next_index
+            next_index += 1
+        seen[found.pass_index] = found.material
+
+
+def _enable_passes(scene, analysis, undo):
+    for layer in scene.view_layers:
+        for name in PASSES:
+            undo.set(layer, "use_pass_" + name, True)
+        for name, needs in OPTIONAL_PASSES.items():
+            if hasattr(layer, "use_pass_" + name) and (
+                    needs is None or getattr(analysis, needs)):
+                undo.set(layer, "use_pass_" + name, True)
+
+
+@contextmanager
+def switched_off(scene, analysis):
+    """Within the block the scene renders without material SSS and with
+    the passes libsss needs; on leaving (normally or by an exception) every
+    changed value, link and node is restored."""
+    undo = _Undo()
+    try:
+        _free_pass_indices(scene, analysis, undo)
+        _enable_passes(scene, analysis, undo)
+        for found in analysis.found:
+            tree = found.material.node_tree
+            if found.node.type == "BSDF_PRINCIPLED":
+                _switch_principled(tree, found.node, undo)
+            else:
+                _switch_sss_node(tree, found.node, undo)
+        yield undo
+    finally:
+        errors = undo.run()
+        if errors:
+            raise RuntimeError("could not restore the scene exactly: " +
+                               "; ".join(errors))

@@ -1,0 +1,75 @@
+"""Shared helpers for the tests that run inside Blender."""
+import os
+import subprocess
+import sys
+
+import bpy
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+BUILD = os.environ.get("SSS_BUILD", os.path.join(ROOT, "build"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))  # exr helpers
+
+
+def build_blend(kind, path, size=96, samples=8):
+    """A scene from blender_scripts/build_scene.py, in its own process so
+    this one's data is untouched."""
+    proc = subprocess.run(
+        [bpy.app.binary_path, "-b", "--factory-startup",
+         "--python-exit-code", "1", "--python",
+         os.path.join(ROOT, "blender_scripts", "build_scene.py"), "--",
+         "--kind", kind, "--out", path, "--size", str(size), "--samples",
+         str(samples)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    return path
+
+
+def _value(sock):
+    v = getattr(sock, "default_value", None)
+    if v is None or isinstance(v, (bool, int, float, str)):
+        return v
+    try:
+        return tuple(v)
+    except TypeError:
+        return repr(v)
+
+
+def snapshot(scene):
+    """Everything the add-on may touch, as plain comparable data."""
+    data = {}
+    for mat in bpy.data.materials:
+        entry = {"pass_index": mat.pass_index, "use_nodes": mat.use_nodes}
+        if mat.node_tree:
+            tree = mat.node_tree
+            entry["nodes"] = {
+                n.name: (n.bl_idname, n.label, tuple(n.location),
+                         tuple((s.identifier, _value(s)) for s in n.inputs),
+                         getattr(n, "subsurface_method", None),
+                         getattr(n, "blend_type", None))
+                for n in tree.nodes}
+            entry["links"] = sorted(
+                (l.from_node.name, l.from_socket.identifier,
+                 l.to_node.name, l.to_socket.identifier)
+                for l in tree.links)
+        data["material:" + mat.name] = entry
+    for layer in scene.view_layers:
+        data["layer:" + layer.name] = {
+            a: getattr(layer, a) for a in dir(layer)
+            if a.startswith("use_pass_")}
+    s = scene.render.image_settings
+    data["image_settings"] = (s.file_format, s.color_depth, s.exr_codec)
+    r = scene.render
+    data["render"] = (r.engine, r.resolution_x, r.resolution_y,
+                      r.resolution_percentage, r.filepath,
+                      r.film_transparent, scene.cycles.samples)
+    data["node_tree"] = None if not scene.node_tree else sorted(
+        (n.name, n.bl_idname) for n in scene.node_tree.nodes)
+    return data
+
+
+def diff(a, b):
+    """Human-readable differences between two snapshots."""
+    out = []
+    for key in sorted(set(a) | set(b)):
+        if a.get(key) != b.get(key):
+            out.append(f"{key}: {a.get(key)!r} != {b.get(key)!r}"[:600])
+    return out

@@ -1,0 +1,130 @@
+"""The packaged add-on: installed from the zip into an empty user scripts
+folder, enabled, and used the way an artist or a farm would."""
+import os
+import subprocess
+
+import addon_utils
+import bpy
+import numpy as np
+import pytest
+
+from helpers import build_blend, diff, snapshot
+from exr import pass_rgb, read_channels
+
+ZIP = os.environ.get("SSS_ADDON_ZIP")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def installed():
+    if not ZIP or not os.path.exists(ZIP):
+        pytest.fail("SSS_ADDON_ZIP is not set: run through make blender-test")
+    os.environ.pop("SSS_LIB", None)  # the zip's own library must be used
+    scripts = os.environ.get("BLENDER_USER_SCRIPTS", "")
+    assert scripts and not os.listdir(scripts), "user scripts not empty"
+    bpy.ops.preferences.addon_install(filepath=ZIP)
+    addon_utils.enable("separable_sss", default_set=True)
+    module = __import__("separable_sss")
+    assert module.__file__.startswith(scripts), module.__file__
+    yield
+    addon_utils.disable("separable_sss")
+
+
+@pytest.fixture(scope="module")
+def blends(tmp_path_factory):
+    d = tmp_path_factory.mktemp("blends")
+    return {kind: build_blend(kind, str(d / f"{kind}.blend"))
+            for kind in ("two", "none")}
+
+
+def result_wiring(scene):
+    """The Image node holding the result and where its output goes."""
+    from separable_sss import nodes
+    node = nodes.find_result(scene)
+    assert node is not None, "no SSS result node"
+    reached, todo = set(), [node]
+    while todo:
+        n = todo.pop()
+        for out in n.outputs:
+            for link in out.links:
+                if link.to_node.name not in reached:
+                    reached.add(link.to_node.name)
+                    todo.append(link.to_node)
+    return node, {scene.node_tree.nodes[n].type for n in reached}
+
+
+def test_render_operator(blends, tmp_path):
+    bpy.ops.wm.open_mainfile(filepath=blends["two"])
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(tmp_path)
+    before = snapshot(scene)
+    assert bpy.ops.sss.render() == {"FINISHED"}
+    result = scene.sss.last_result
+    assert os.path.exists(result)
+    node, reached = result_wiring(scene)
+    assert bpy.path.abspath(node.image.filepath) == result
+    assert "COMPOSITE" in reached
+    after = snapshot(scene)
+    after["node_tree"] = before["node_tree"]  # the set-up was added
+    assert diff(before, after) == []
+    ch, _ = read_channels(result)
+    index = ch["ViewLayer.IndexMA.X"]
+    changed = np.abs(pass_rgb(ch, "SSS.Combined") -
+                     pass_rgb(ch, "ViewLayer.Combined")).max(-1) > 1e-5
+    assert changed.any()
+    assert np.all(index[changed] > 0), "a plain pixel changed"
+    # Running it again reuses the set-up instead of adding nodes.
+    count = len(scene.node_tree.nodes)
+    assert bpy.ops.sss.apply() == {"FINISHED"}
+    assert len(scene.node_tree.nodes) == count
+
+
+def test_nothing_scatters(blends, tmp_path):
+    bpy.ops.wm.open_mainfile(filepath=blends["none"])
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(tmp_path)
+    before = snapshot(scene)
+    assert bpy.ops.sss.render() == {"CANCELLED"}
+    assert diff(before, snapshot(scene)) == []
+    assert os.listdir(tmp_path) == []
+
+
+def test_library_error_is_one_line_and_restores(blends, tmp_path,
+                                                monkeypatch):
+    bpy.ops.wm.open_mainfile(filepath=blends["two"])
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(tmp_path)
+    before = snapshot(scene)
+    monkeypatch.setenv("SSS_TEST_FAIL", "library")
+    # Called from Python, an operator's ERROR report becomes a RuntimeError
+    # carrying the report's text: one line, the library's own message.
+    with pytest.raises(RuntimeError) as err:
+        bpy.ops.sss.render()
+    message = str(err.value).strip()
+    assert "radius scale" in message and "\n" not in message
+    assert "Traceback" not in message
+    assert diff(before, snapshot(scene)) == []
+
+
+def test_animation_render_with_handler(blends, tmp_path):
+    """blender -b scene.blend -a with the add-on enabled: each frame gets
+    its SSS result beside it and a line is printed per frame."""
+    bpy.ops.wm.open_mainfile(filepath=blends["two"])
+    scene = bpy.context.scene
+    scene.sss.use_animation = True
+    scene.sss.output_dir = str(tmp_path)
+    scene.frame_start, scene.frame_end = 1, 2
+    scene.render.filepath = str(tmp_path / "frame_####")
+    scene.cycles.samples = 2
+    path = str(tmp_path / "anim.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    before = open(path, "rb").read()
+    proc = subprocess.run(
+        [bpy.app.binary_path, "-b", path, "--python-expr",
+         "import addon_utils; addon_utils.enable('separable_sss')", "-a"],
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    for f in (1, 2):
+        assert (tmp_path / f"frame_{f:04d}.exr").exists()
+        assert (tmp_path / f"frame_{f:04d}_sss.exr").exists(), proc.stdout
+        assert f"SSS: frame {f}:" in proc.stdout
+    assert open(path, "rb").read() == before

@@ -1,0 +1,154 @@
+"""The add-on's pipeline on real Cycles renders, headless."""
+import json
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+from helpers import BUILD, ROOT, build_blend, diff, snapshot
+
+os.environ.setdefault("SSS_LIB", os.path.join(BUILD, "libsss.so"))
+import sys  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+import separable_sss  # noqa: E402
+from separable_sss import pipeline  # noqa: E402
+
+from exr import pass_rgb, read_channels  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    separable_sss.register()
+    yield
+    separable_sss.unregister()
+
+
+@pytest.fixture(scope="module")
+def blends(tmp_path_factory):
+    d = tmp_path_factory.mktemp("blends")
+    return {kind: build_blend(kind, str(d / f"{kind}.blend"))
+            for kind in ("two", "none")}
+
+
+def open_scene(path, out_dir):
+    bpy.ops.wm.open_mainfile(filepath=path)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(out_dir)
+    return scene
+
+
+def render(scene):
+    job = pipeline.prepare_render(bpy.context)
+    pipeline.scatter(job)
+    return job
+
+
+def test_scene_restored_exactly_after_render(blends, tmp_path):
+    scene = open_scene(blends["two"], tmp_path)
+    before = snapshot(scene)
+    job = render(scene)
+    assert os.path.exists(job.output_exr)
+    assert diff(before, snapshot(scene)) == []
+
+
+@pytest.mark.parametrize("where", ["render", "library"])
+def test_scene_restored_after_failure(blends, tmp_path, monkeypatch, where):
+    scene = open_scene(blends["two"], tmp_path)
+    before = snapshot(scene)
+    monkeypatch.setenv("SSS_TEST_FAIL", where)
+    with pytest.raises(pipeline.SSSError) as err:
+        render(scene)
+    if where == "library":
+        assert "radius scale" in str(err.value)
+    assert diff(before, snapshot(scene)) == []
+
+
+def test_radius_scale_zero_is_cycles_combined(blends, tmp_path):
+    scene = open_scene(blends["two"], tmp_path)
+    scene.sss.radius_scale = 0.0
+    job = render(scene)
+    ch, _ = read_channels(job.output_exr)
+    want = np.stack([ch[f"ViewLayer.Combined.{c}"] for c in "RGBA"], -1)
+    got = np.stack([ch[f"SSS.Combined.{c}"] for c in "RGBA"], -1)
+    err = np.abs(got - want) / np.maximum(np.abs(want), 1e-2)
+    assert err.max() < 1e-4, err.max()
+
+
+def test_two_materials_keep_their_profiles(blends, tmp_path):
+    scene = open_scene(blends["two"], tmp_path)
+    job = render(scene)
+    desc = json.load(open(job.scene_json))
+    mats = {m["name"]: m for m in desc["materials"]}
+    assert set(mats) == {"Skin", "Jade"}
+    assert mats["Skin"]["pass_index"] != mats["Jade"]["pass_index"]
+    assert mats["Skin"]["radius"] != mats["Jade"]["radius"]
+    # The render used these indices even though the materials had none.
+    assert all(m.pass_index == 0 for m in bpy.data.materials)
+    ch, _ = read_channels(job.output_exr)
+    index = ch["ViewLayer.IndexMA.X"]
+    before = pass_rgb(ch, "ViewLayer.Combined")
+    after = pass_rgb(ch, "SSS.Combined")
+    changed = np.abs(after - before).max(-1) > 1e-5
+    scattering = np.isin(index, [m["pass_index"] for m in mats.values()])
+    assert changed[scattering].mean() > 0.2
+    assert not changed[~scattering].any(), "plain pixels changed"
+    # Each material scattered with its own kernel: its pixels are exactly
+    # what a table holding only that material gives.
+    import subprocess
+    light = pass_rgb(ch, "SSS.DiffLight")
+    for name in ("Skin", "Jade"):
+        alone = dict(desc, materials=[mats[name]])
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps(alone))
+        out = tmp_path / f"{name}.exr"
+        subprocess.run([os.path.join(BUILD, "sss"), job.input_exr, "-o",
+                        str(out), "--scene", str(path), "-q"], check=True)
+        only, _ = read_channels(out)
+        mask = index == mats[name]["pass_index"]
+        assert np.array_equal(pass_rgb(only, "SSS.DiffLight")[mask],
+                              light[mask]), name
+        other = np.isin(index, [m["pass_index"] for m in mats.values()]) \
+            & ~mask
+        assert not np.array_equal(pass_rgb(only, "SSS.DiffLight")[other],
+                                  light[other]), name
+
+
+def test_switched_off_render_keeps_the_look(blends, tmp_path):
+    """Rendering with SSS off changes only how light spreads, not the
+    material's colour: DiffCol there is mix(base, subsurface colour)."""
+    scene = open_scene(blends["two"], tmp_path)
+    job = render(scene)
+    ch, _ = read_channels(job.input_exr)
+    index = ch["ViewLayer.IndexMA.X"]
+    desc = json.load(open(job.scene_json))
+    skin = [m for m in desc["materials"] if m["name"] == "Skin"][0]
+    col = pass_rgb(ch, "ViewLayer.DiffCol")[index == skin["pass_index"]]
+    base, sub, t = np.array([0.8, 0.6, 0.5]), np.array([0.9, 0.5, 0.4]), 0.5
+    assert np.allclose(np.median(col, 0), base + (sub - base) * t, atol=2e-3)
+
+
+def test_no_scattering_material(blends, tmp_path):
+    scene = open_scene(blends["none"], tmp_path)
+    assert pipeline.analyse(scene).found == []
+
+
+def test_render_sss_script(blends, tmp_path):
+    import subprocess
+    mtime = os.path.getmtime(blends["two"])
+    out = tmp_path / "shot_####.exr"
+    proc = subprocess.run(
+        [bpy.app.binary_path, "-b", blends["two"], "--python-exit-code", "1",
+         "--python", os.path.join(ROOT, "blender_scripts", "render_sss.py"),
+         "--", "--output", str(out), "--frames", "1-2", "--samples", "2",
+         "--resolution", "48x40"], capture_output=True, text=True,
+        timeout=600, env=dict(os.environ))
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    for f in (1, 2):
+        exr = tmp_path / f"shot_{f:04d}.exr"
+        ch, spec = read_channels(exr)
+        assert (spec.width, spec.height) == (48, 40)
+        assert "SSS.Combined.R" in ch and "ViewLayer.DiffDir.R" in ch
+        assert (tmp_path / f"shot_{f:04d}_scene.json").exists()
+        assert f"frame {f}:" in proc.stdout
+    assert os.path.getmtime(blends["two"]) == mtime  # the .blend untouched
