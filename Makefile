@@ -45,7 +45,11 @@ $(BUILD)/sss: csrc/sss_main.c $(LIB_SRC) $(LIB_HDR) Makefile
 # internal helpers; the shared library is what ships and what nm checks.
 $(BUILD)/tests/%: tests/%.c tests/test_util.h tests/synth.h $(LIB_SRC) $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -Icsrc -o $@ $< $(LIB_SRC) $(LDLIBS)
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -Icsrc -o $@ $< $(LIB_SRC) $(LDLIBS) \
+		$(if $(findstring test_oom,$@),$(WRAP_ALLOC))
+
+# test_oom sees every allocation the library's own code makes.
+WRAP_ALLOC := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc
 
 deps:
 	@sh scripts/install-deps.sh

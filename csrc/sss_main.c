@@ -4,7 +4,9 @@
 #define _GNU_SOURCE /* getopt_long */
 #include "sss.h"
 
+#include <dirent.h>
 #include <errno.h>
+#include <signal.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -38,6 +40,8 @@ static const char usage_text[] =
 "                          piz, rle, none)\n"
 "  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
 "      --max-size WxH      refuse inputs larger than this (default 32768x32768)\n"
+"      --resume            skip frames whose output exists (outputs appear\n"
+"                          only when complete, so a killed run resumes)\n"
 "  -q, --quiet             print errors only\n"
 "  -h, --help              this text\n"
 "  -V, --version           version\n"
@@ -59,6 +63,7 @@ typedef struct args {
 	int threads;         /* -1 = the scene's */
 	int max_w, max_h;
 	int quiet;
+	int resume;
 } args;
 
 static int usage_error(const char *fmt, const char *what)
@@ -151,6 +156,41 @@ static int expand(const char *pattern, int frame, char *out, size_t len)
 	return n >= 0 && (size_t)n < len ? 0 : -1;
 }
 
+/* Removes temporary files a killed earlier run left for `out`
+ * ("<dir>/.<name>.tmp-<pid>-<n>", see sss_exr_write) when that process is
+ * gone: a frame is either complete under its name or absent. */
+static void remove_stale_temporaries(const char *out)
+{
+	const char *slash = strrchr(out, '/');
+	const char *name = slash ? slash + 1 : out;
+	char dir[4096];
+	if (!slash)
+		snprintf(dir, sizeof dir, ".");
+	else if (slash == out)
+		snprintf(dir, sizeof dir, "/");
+	else
+		snprintf(dir, sizeof dir, "%.*s", (int)(slash - out), out);
+	char prefix[1024];
+	int n = snprintf(prefix, sizeof prefix, ".%s.tmp-", name);
+	if (n < 0 || (size_t)n >= sizeof prefix)
+		return;
+	DIR *d = opendir(dir);
+	if (!d)
+		return;
+	struct dirent *e;
+	while ((e = readdir(d))) {
+		if (strncmp(e->d_name, prefix, (size_t)n) != 0)
+			continue;
+		long pid = strtol(e->d_name + n, NULL, 10);
+		if (pid <= 0 || (kill((pid_t)pid, 0) != 0 && errno == ESRCH)) {
+			char path[8192];
+			snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+			unlink(path);
+		}
+	}
+	closedir(d);
+}
+
 static void progress_bar(int done, int total, int failed)
 {
 	int width = 30, fill = total ? done * width / total : width;
@@ -164,7 +204,8 @@ static void progress_bar(int done, int total, int failed)
 
 int main(int argc, char **argv)
 {
-	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, 32768, 32768, 0};
+	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, 32768, 32768, 0,
+	          0};
 	static const struct option longopts[] = {
 		{"output", required_argument, NULL, 'o'},
 		{"scene", required_argument, NULL, 's'},
@@ -176,6 +217,7 @@ int main(int argc, char **argv)
 		{"threads", required_argument, NULL, 't'},
 		{"max-size", required_argument, NULL, 'S'},
 		{"quiet", no_argument, NULL, 'q'},
+		{"resume", no_argument, NULL, 'R'},
 		{"help", no_argument, NULL, 'h'},
 		{"version", no_argument, NULL, 'V'},
 		{NULL, 0, NULL, 0},
@@ -190,6 +232,7 @@ int main(int argc, char **argv)
 		case 'f': a.frames = optarg; break;
 		case 'l': a.layer = optarg; break;
 		case 'q': a.quiet = 1; break;
+		case 'R': a.resume = 1; break;
 		case 'h': fputs(usage_text, stdout); return 0;
 		case 'V':
 			printf("sss %s (libsss ABI %u)\n", sss_version_string(),
@@ -278,8 +321,8 @@ int main(int argc, char **argv)
 		return 2;
 	}
 
-	int failed = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
-	                      frames.count > 1;
+	int failed = 0, skipped = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
+	                                   frames.count > 1;
 	sss_process_options po;
 	sss_process_options_default(&po);
 	po.layer = a.layer;
@@ -300,7 +343,15 @@ int main(int argc, char **argv)
 		    expand(a.output, f, out, sizeof out)) {
 			snprintf(err, sizeof err, "frame %d: path too long", f);
 			bad = 1;
+		} else if (a.resume && access(out, F_OK) == 0) {
+			skipped++;
+			if (!a.quiet)
+				printf("%s: exists, skipped (--resume)\n", out);
+			if (bar)
+				progress_bar(i + 1, frames.count, failed);
+			continue;
 		} else {
+			remove_stale_temporaries(out);
 			bad = sss_process_exr(in, out, scene, &po, &t, err,
 			                      sizeof err) != SSS_OK;
 		}
@@ -321,9 +372,10 @@ int main(int argc, char **argv)
 			progress_bar(i + 1, frames.count, failed);
 	}
 	if (!a.quiet && frames.count > 1)
-		printf("%d frames: %d written, %d failed; read %.2f s, sss %.2f s, "
-		       "write %.2f s\n", frames.count, frames.count - failed, failed,
-		       total.read, total.scatter, total.write);
+		printf("%d frames: %d written, %d skipped, %d failed; read %.2f s, "
+		       "sss %.2f s, write %.2f s\n", frames.count,
+		       frames.count - failed - skipped, skipped, failed, total.read,
+		       total.scatter, total.write);
 	sss_scene_free(scene);
 	if (frames.frames != &single)
 		free(frames.frames);

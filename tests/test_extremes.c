@@ -13,6 +13,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE};
 
@@ -20,7 +21,8 @@ typedef struct shape {
 	int w, h;
 } shape;
 
-static const shape shapes[] = {{1, 1}, {1, 7}, {7, 1}, {3, 3}, {9, 5}};
+static const shape shapes[] = {{1, 1}, {1, 7}, {7, 1}, {3, 3}, {9, 5},
+                               {513, 257}};
 
 enum poison_kind { POISON_NONE, POISON_DEPTH, POISON_LIGHT, POISON_COLOUR };
 
@@ -36,6 +38,9 @@ static const struct poison {
 	{"depth=Inf", POISON_DEPTH, INFINITY},
 	{"depth=1e10", POISON_DEPTH, 1e10f},
 	{"depth=1e-6", POISON_DEPTH, 1e-6f},
+	{"light=0", POISON_LIGHT, 0.0f},
+	{"light=1", POISON_LIGHT, 1.0f},
+	{"light=1e-38", POISON_LIGHT, 1e-38f},
 	{"light=NaN", POISON_LIGHT, NAN},
 	{"light=Inf", POISON_LIGHT, INFINITY},
 	{"light=-Inf", POISON_LIGHT, -INFINITY},
@@ -47,7 +52,7 @@ static const struct poison {
 };
 
 static const float radii[] = {0.0f, 1e-9f, 1e-4f, 0.01f, 1.0f, 1e3f};
-static const int taps[] = {1, 3, 33, 1000};
+static const int taps[] = {1, 3, 0, 1000}; /* 0: the default */
 
 static int finite3(const float *v)
 {
@@ -84,7 +89,8 @@ static void run_case(const shape *sh, const struct poison *po, float radius,
 	sss_options o;
 	sss_options_default(&o);
 	o.method = method;
-	o.max_support_px = 64;
+	/* The reference is radius^2 per pixel: keep the big image cheap. */
+	o.max_support_px = w * h > 1000 && method == SSS_METHOD_REFERENCE ? 2 : 64;
 	sss_passes p = synth_passes(s);
 	sss_camera cam;
 	sss_camera_default(&cam);
@@ -190,17 +196,93 @@ static void test_scales(void)
 	synth_free(s);
 }
 
+/* An impulse in the middle of a plane: its light is spread, not created
+ * or lost (interior pixels, kernels inside the image), for every profile
+ * kind, method and tap count. */
+static void test_energy(void)
+{
+	static const int kinds[] = {SSS_PROFILE_BURLEY, SSS_PROFILE_GAUSSIANS,
+	                            SSS_PROFILE_JIMENEZ, SSS_PROFILE_NEAR_FAR};
+	static const int energy_taps[] = {3, 0, 1000};
+	/* Every pixel that receives light must have its whole kernel inside
+	 * the image, or border renormalisation (by design) adds energy. */
+	int w = 53, h = 53;
+	for (size_t k = 0; k < 4; k++)
+		for (size_t mt = 0; mt < 2; mt++)
+			for (size_t t = 0; t < 3; t++) {
+				/* Taps mean nothing to the reference. */
+				if (methods[mt] == SSS_METHOD_REFERENCE && t != 1)
+					continue;
+				synth *s = synth_new(w, h);
+				synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
+				size_t centre = (size_t)26 * w + 26;
+				for (int c = 0; c < 3; c++)
+					s->diff_dir[3 * centre + c] = 1.0f;
+				sss_material m;
+				sss_material_default(&m, kinds[k]);
+				m.pass_index = 1;
+				m.taps = energy_taps[t];
+				double support;
+				sss_material_support(&m, &support);
+				/* Support of 12 px at 2 m (default camera, 53 px wide). */
+				double scale = 12.0 / (support * w * 50.0 / 36.0 / 2.0);
+				for (int c = 0; c < 3; c++)
+					m.radius[c] *= (float)scale;
+				m.gaussian_scale *= (float)scale;
+				m.jimenez_width *= (float)scale;
+				m.scatter_scale *= (float)scale;
+				sss_options o;
+				sss_options_default(&o);
+				o.method = methods[mt];
+				sss_passes p = synth_passes(s);
+				sss_camera cam;
+				sss_camera_default(&cam);
+				float *light = calloc((size_t)3 * w * h, sizeof(float));
+				sss_image ol = {light, w, h, 3, 0};
+				sss_result r = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol,
+				                         NULL, 0);
+				double sum[3] = {0, 0, 0};
+				for (size_t i = 0; i < (size_t)w * h; i++)
+					for (int c = 0; c < 3; c++)
+						sum[c] += light[3 * i + c];
+				char id[64];
+				snprintf(id, sizeof id, "energy-kind=%d/m=%d/taps=%d",
+				         kinds[k], methods[mt], energy_taps[t]);
+				for (int c = 0; c < 3; c++)
+					CHECK(id, r == SSS_OK && fabs(sum[c] - 1.0) < 1e-4,
+					      "channel %d: impulse of 1 spreads to %.7f", c,
+					      sum[c]);
+				free(light);
+				synth_free(s);
+			}
+}
+
 int main(void)
 {
+	/* A hang is a failure: nothing here may take minutes. */
+	alarm(600);
 	int cases = 0;
 	for (size_t a = 0; a < sizeof shapes / sizeof *shapes; a++)
 		for (size_t b = 0; b < sizeof poisons / sizeof *poisons; b++)
 			for (size_t c = 0; c < sizeof radii / sizeof *radii; c++)
 				for (size_t d = 0; d < sizeof taps / sizeof *taps; d++)
-					for (size_t e = 0; e < 2; e++)
+					for (size_t e = 0; e < 2; e++) {
+						/* The big image: the non-finite and huge values,
+						 * three radii, default taps. */
+						if (shapes[a].w > 100 &&
+						    (taps[d] != 0 || (c != 0 && c != 2 && c != 5) ||
+						     (methods[e] == SSS_METHOD_REFERENCE &&
+						      (c != 5 || (poisons[b].kind != POISON_NONE &&
+						                  !isnan(poisons[b].value)))) ||
+						     !(poisons[b].kind == POISON_NONE ||
+						       !isfinite(poisons[b].value) ||
+						       poisons[b].value > 1e29f)))
+							continue;
 						run_case(&shapes[a], &poisons[b], radii[c], taps[d],
 						         methods[e], (int)(c % 2), &cases);
+					}
 	printf("report: %d extreme cases\n", cases);
+	test_energy();
 	test_constant_extremes();
 	test_scales();
 	return tu_finish("test_extremes");

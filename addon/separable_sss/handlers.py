@@ -31,6 +31,12 @@ def on_init(scene, *_):
         print(f"SSS: {scene.name}: no material scatters; frames are left "
               "alone")
         return
+    try:
+        desc = os.path.join(pipeline.output_dir(scene),
+                            f"{pipeline._safe(scene.name)}_scene.json")
+    except pipeline.SSSError as e:
+        print(f"SSS: {scene.name}: {e}; frames are left alone", flush=True)
+        return
     block = switched_off(scene, analysis)
     block.__enter__()
     settings = scene.render.image_settings
@@ -38,8 +44,6 @@ def on_init(scene, *_):
     settings.file_format = "OPEN_EXR_MULTILAYER"
     settings.color_depth = "32"
     settings.exr_codec = "ZIP"
-    desc = os.path.join(pipeline.output_dir(scene),
-                        f"{pipeline._safe(scene.name)}_scene.json")
     pipeline.write_description(scene, analysis, desc)
     _active[scene.name] = (block, saved, desc)
 

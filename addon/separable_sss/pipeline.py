@@ -40,7 +40,13 @@ def output_dir(scene):
     per-user temporary folder."""
     path = bpy.path.abspath(scene.sss.output_dir) if scene.sss.output_dir \
         else os.path.join(tempfile.gettempdir(), "separable_sss")
-    os.makedirs(path, exist_ok=True)
+    try:
+        os.makedirs(path, exist_ok=True)
+        probe = tempfile.NamedTemporaryFile(dir=path, prefix=".sss-probe-")
+        probe.close()
+    except OSError as e:
+        raise SSSError(f"output folder {path} is not writable: "
+                       f"{e.strerror or e}") from None
     return path
 
 
@@ -174,10 +180,14 @@ def prepare_render(context):
     with switched_off(scene, found) as undo:
         # The compositor would only show the previous SSS result again.
         undo.set(scene.render, "use_compositing", False)
-        if os.environ.get("SSS_TEST_FAIL") == "render":
+        fail = os.environ.get("SSS_TEST_FAIL")
+        if fail == "render":
             raise SSSError("injected failure (SSS_TEST_FAIL=render)")
-        if bpy.ops.render.render() != {"FINISHED"}:
-            raise SSSError("the render was cancelled")
+        # SSS_TEST_FAIL=cancel: as if the artist pressed Esc.
+        status = {"CANCELLED"} if fail == "cancel" else \
+            bpy.ops.render.render()
+        if status != {"FINISHED"}:
+            raise SSSError("the render was cancelled; nothing was changed")
         save_passes(scene, inp)
         write_description(scene, found, desc)
     return Job(inp, out, desc, context.view_layer.name,

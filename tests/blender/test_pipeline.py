@@ -52,15 +52,44 @@ def test_scene_restored_exactly_after_render(blends, tmp_path):
     assert diff(before, snapshot(scene)) == []
 
 
-@pytest.mark.parametrize("where", ["render", "library"])
-def test_scene_restored_after_failure(blends, tmp_path, monkeypatch, where):
+@pytest.mark.parametrize("where,needle", [
+    ("render", "injected"), ("cancel", "cancelled"),
+    ("library", "radius scale")])
+def test_scene_restored_after_failure(blends, tmp_path, monkeypatch, where,
+                                      needle):
     scene = open_scene(blends["two"], tmp_path)
     before = snapshot(scene)
     monkeypatch.setenv("SSS_TEST_FAIL", where)
     with pytest.raises(pipeline.SSSError) as err:
         render(scene)
-    if where == "library":
-        assert "radius scale" in str(err.value)
+    assert needle in str(err.value)
+    assert diff(before, snapshot(scene)) == []
+
+
+def test_unwritable_output_folder(blends, tmp_path):
+    scene = open_scene(blends["two"], tmp_path)
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    scene.sss.output_dir = str(blocker / "sss")
+    before = snapshot(scene)
+    with pytest.raises(pipeline.SSSError) as err:
+        render(scene)
+    assert "not writable" in str(err.value) and "a_file" in str(err.value)
+    assert diff(before, snapshot(scene)) == []
+
+
+def test_missing_pass_is_one_clear_error(blends, tmp_path):
+    """Apply to a render made without the passes: the library names the
+    missing pass; nothing in the scene changes."""
+    scene = open_scene(blends["two"], tmp_path)
+    for layer in scene.view_layers:
+        layer.use_pass_diffuse_direct = False
+    bpy.ops.render.render()
+    before = snapshot(scene)
+    job = pipeline.prepare_last_render(bpy.context)
+    with pytest.raises(pipeline.SSSError) as err:
+        pipeline.scatter(job)
+    assert "DiffDir" in str(err.value)
     assert diff(before, snapshot(scene)) == []
 
 

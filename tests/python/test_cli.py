@@ -101,7 +101,7 @@ def test_sequence_reports_bad_frame_and_continues(sss_cmd, blender_render,
     assert (tmp_path / "out_0001.exr").exists()
     assert not (tmp_path / "out_0002.exr").exists()
     assert (tmp_path / "out_0003.exr").exists()
-    assert "3 frames: 2 written, 1 failed" in proc.stdout
+    assert "3 frames: 2 written, 0 skipped, 1 failed" in proc.stdout
     leftovers = [p for p in os.listdir(tmp_path) if "tmp" in p]
     assert leftovers == []
     # Timing per frame is reported.
@@ -199,3 +199,37 @@ def test_usage(sss_cmd, tmp_path):
         "--radius-scale", "-1", check=2)
     run(sss_cmd, "a.exr", "-o", "b.exr", "--scene", "s.json",
         "--method", "magic", check=2)
+
+
+def test_resume_after_a_killed_run(sss_cmd, blender_render, tmp_path):
+    """Killed mid-sequence: only complete frames exist (outputs appear by
+    rename), and --resume does the rest without redoing them."""
+    import signal
+    import time
+    src = blender_render / "render.exr"
+    for f in range(1, 41):
+        os.symlink(src, tmp_path / f"in_{f:04d}.exr")
+    args = [sss_cmd, tmp_path / "in_####.exr", "--frames", "1-40", "-o",
+            tmp_path / "out_####.exr", "--scene",
+            blender_render / "scene.json", "--method", "reference", "-q"]
+    proc = subprocess.Popen([str(a) for a in args])
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "out_0002.exr").exists():
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = sorted(p.name for p in tmp_path.glob("out_*.exr"))
+    assert 2 <= len(done) < 40
+    for name in done:  # every output that exists is complete
+        ch, _ = read_channels(tmp_path / name)
+        assert "SSS.Combined.R" in ch
+    stamps = {n: (tmp_path / n).stat().st_mtime_ns for n in done}
+    # A temporary file of a process that is gone, as a kill can leave.
+    (tmp_path / ".out_0040.exr.tmp-999999999-1").write_bytes(b"partial")
+    proc = run(*args[:-1], "--resume", check=0)
+    assert not list(tmp_path.glob(".*tmp*")), "stale temporary kept"
+    assert f"{len(done)} skipped" in proc.stdout
+    assert len(list(tmp_path.glob("out_*.exr"))) == 40
+    for name, stamp in stamps.items():
+        assert (tmp_path / name).stat().st_mtime_ns == stamp
