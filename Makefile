@@ -28,7 +28,7 @@ LIB_HDR   := csrc/sss.h csrc/sss_internal.h
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 
-.PHONY: all deps test check demo demo-c report addon blender-test clean
+.PHONY: all deps test check valgrind demo demo-c report addon blender-test clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -62,9 +62,20 @@ test: deps all $(TESTS) addon
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
 	@$(MAKE) --no-print-directory blender-test
+	@if command -v valgrind >/dev/null; then \
+		$(MAKE) --no-print-directory valgrind; \
+	else echo "make valgrind: skipped (valgrind is not installed)"; fi
 	@if sh scripts/sanitizers-supported.sh "$(CC)"; then \
 		$(MAKE) --no-print-directory check; \
 	else echo "make check: skipped ($(CC) cannot build with ASan+UBSan here)"; fi
+
+# Valgrind memcheck on the C tests whose run stays short under it (the
+# blur and extreme-value tests run under ASan instead: too slow here).
+VALGRIND_TESTS := $(filter-out %/test_blur %/test_extremes,$(TESTS))
+valgrind: $(VALGRIND_TESTS)
+	@TEST_RUNNER="valgrind -q --error-exitcode=99 --leak-check=full \
+		--errors-for-leak-kinds=definite" \
+		sh tests/run_c_tests.sh $(BUILD) $(VALGRIND_TESTS)
 
 # Sanitizer build: every C test and the command's tests again with ASan +
 # UBSan, warnings as errors.

@@ -6,7 +6,8 @@ set -u
 # renders real scenes; Debian's python3 with numpy, pytest and OpenImageIO
 # checks the results independently of the code under test.
 PACKAGES="gcc make libc6-dev pkg-config binutils libpng-dev libopenexr-dev
-libcjson-dev blender python3 python3-numpy python3-pytest python3-openimageio"
+libcjson-dev blender python3 python3-numpy python3-pytest python3-openimageio
+valgrind"
 missing=""
 for p in $PACKAGES; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" \

@@ -7,7 +7,7 @@ shift
 passed=0
 failed=0
 for t in "$@"; do
-	out=$("$t" 2>&1)
+	out=$(${TEST_RUNNER:-} "$t" 2>&1)
 	rc=$?
 	printf '%s\n' "$out" | grep -v -E '^(ok |[0-9]+ passed, [0-9]+ failed)'
 	line=$(printf '%s\n' "$out" | grep -E '^[0-9]+ passed, [0-9]+ failed' | tail -n 1)

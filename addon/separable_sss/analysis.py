@@ -4,6 +4,8 @@ from dataclasses import dataclass, field
 
 import bpy
 
+from .blender_compat import PRINCIPLED, principled_input
+
 
 @dataclass
 class Found:
@@ -51,7 +53,7 @@ def _is_linked(node, name):
 
 def _scatters(node):
     """(factor, linked) for a Principled node's Subsurface input."""
-    sock = node.inputs["Subsurface"]
+    sock = principled_input(node, "subsurface")
     if sock.is_linked:
         return 1.0, True
     return float(sock.default_value), False
@@ -68,14 +70,14 @@ def analyse(scene):
         for node in mat.node_tree.nodes:
             if node.type == "EMISSION" or (
                     node.type == "BSDF_PRINCIPLED" and
-                    _input_value(node, "Emission Strength") and
-                    (_is_linked(node, "Emission") or
-                     any(_input_value(node, "Emission")[:3]))):
+                    _input_value(node, PRINCIPLED["emission_strength"]) and
+                    (_is_linked(node, PRINCIPLED["emission"]) or
+                     any(_input_value(node, PRINCIPLED["emission"])[:3]))):
                 result.emits = True
             if node.type in ("BSDF_GLASS", "BSDF_REFRACTION") or (
                     node.type == "BSDF_PRINCIPLED" and
-                    (_is_linked(node, "Transmission") or
-                     _input_value(node, "Transmission") > 0)):
+                    (_is_linked(node, PRINCIPLED["transmission"]) or
+                     _input_value(node, PRINCIPLED["transmission"]) > 0)):
                 result.transmits = True
         if settings is not None and settings.profile == "NONE":
             continue
@@ -85,10 +87,10 @@ def analyse(scene):
                 factor, linked = _scatters(node)
                 if factor <= 0.0:
                     continue
-                r = node.inputs["Subsurface Radius"].default_value
+                r = principled_input(node, "subsurface_radius").default_value
                 found = Found(mat, mat.name, mat.pass_index, node,
                               tuple(v * factor * unit for v in r),
-                              tuple(node.inputs["Subsurface Color"]
+                              tuple(principled_input(node, "subsurface_color")
                                     .default_value[:3]),
                               node.subsurface_method, linked)
                 if linked:

@@ -13,6 +13,8 @@ from contextlib import contextmanager
 
 import bpy
 
+from .blender_compat import principled_input
+
 PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
           "glossy_direct", "glossy_indirect", "glossy_color", "z",
           "material_index")
@@ -79,9 +81,9 @@ def _new_node(tree, undo, kind, location):
 
 
 def _switch_principled(tree, node, undo):
-    base = node.inputs["Base Color"]
-    sscol = node.inputs["Subsurface Color"]
-    factor = node.inputs["Subsurface"]
+    base = principled_input(node, "base")
+    sscol = principled_input(node, "subsurface_color")
+    factor = principled_input(node, "subsurface")
     if not (base.is_linked or sscol.is_linked or factor.is_linked):
         t = factor.default_value
         mixed = tuple(b + (s - b) * t for b, s in

@@ -233,3 +233,36 @@ def test_resume_after_a_killed_run(sss_cmd, blender_render, tmp_path):
     assert len(list(tmp_path.glob("out_*.exr"))) == 40
     for name, stamp in stamps.items():
         assert (tmp_path / name).stat().st_mtime_ns == stamp
+
+
+def test_unwritable_output_and_full_disk(sss_cmd, blender_render, tmp_path):
+    """Output where nothing can be written, and a disk that fills up
+    mid-write (a file size limit): a clear error naming the output, no
+    partial file, the input untouched."""
+    import resource
+    src = tmp_path / "in.exr"
+    shutil.copy(blender_render / "render.exr", src)
+    before = src.read_bytes()
+    blocker = tmp_path / "not_a_dir"
+    blocker.write_text("x")
+    proc = run(sss_cmd, src, "-o", blocker / "out.exr", "--scene",
+               blender_render / "scene.json", check=1)
+    assert "out.exr" in proc.stderr
+    limit = 20000  # bytes: the output is larger, the write fails midway
+
+    def small_disk():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+        import signal
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+
+    out = tmp_path / "out.exr"
+    proc = subprocess.run([sss_cmd, str(src), "-o", str(out), "--scene",
+                           str(blender_render / "scene.json")],
+                          capture_output=True, text=True,
+                          preexec_fn=small_disk)
+    assert proc.returncode == 1, proc.stderr
+    assert "out.exr" in proc.stderr
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "in.exr", "not_a_dir"]
+    assert src.read_bytes() == before
