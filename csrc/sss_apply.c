@@ -207,14 +207,15 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	if ((r = sss__projection_make(cam, w, h, &(sss__projection){0}, errbuf,
 	                              errbuf_len)))
 		return r;
+	uint8_t seen[65536 / 8] = {0}; /* pass indices already in the table */
 	for (int32_t m = 0; m < material_count; m++) {
 		if ((r = sss_material_validate(&materials[m], errbuf, errbuf_len)))
 			return r;
-		for (int32_t n = 0; n < m; n++)
-			if (materials[n].pass_index == materials[m].pass_index)
-				return FAILX(SSS_ERR_INVALID_ARGUMENT, "material pass_index "
-				             "%d appears twice in the table",
-				             materials[m].pass_index);
+		int32_t idx = materials[m].pass_index;
+		if (seen[idx / 8] & (1u << (idx % 8)))
+			return FAILX(SSS_ERR_INVALID_ARGUMENT, "material pass_index "
+			             "%d appears twice in the table", idx);
+		seen[idx / 8] |= (uint8_t)(1u << (idx % 8));
 	}
 
 	/* All allocations up front, one error path. */
@@ -231,12 +232,26 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		goto done;
 	}
 
+	/* Kernels only for the table's materials that are on screen: a big
+	 * scene-wide table costs nothing for the materials this frame lacks. */
+	uint8_t on_screen[65536 / 8] = {0};
+	for (int32_t y = 0; y < h; y++)
+		for (int32_t x = 0; x < w; x++) {
+			float index = pixel(&p->index_ma, x, y)[0];
+			if (index >= 0.5f && index < 65535.5f) {
+				int32_t i = (int32_t)(index + 0.5f);
+				on_screen[i / 8] |= (uint8_t)(1u << (i % 8));
+			}
+		}
 	for (int i = 0; i < 65536; i++)
 		by_index[i] = -1;
 	for (int32_t m = 0; m < material_count; m++) {
+		int32_t idx = materials[m].pass_index;
+		if (!(on_screen[idx / 8] & (1u << (idx % 8))))
+			continue;
 		sss__kernel_build(&materials[m], &opt, cam->unit_scale, &kernels[m]);
 		if (kernels[m].support > 0.0)
-			by_index[materials[m].pass_index] = (int16_t)m;
+			by_index[idx] = (int16_t)m;
 	}
 
 	sss__job job = {
