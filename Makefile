@@ -26,9 +26,10 @@ LDLIBS  := -lOpenEXRCore -lcjson -lm -pthread
 LIB_SRC   := $(sort $(filter-out csrc/sss_main.c,$(wildcard csrc/sss_*.c)))
 LIB_HDR   := csrc/sss.h csrc/sss_internal.h
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
-TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
+TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
+             $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps test check valgrind demo demo-c report addon blender-test clean
+.PHONY: all deps test check valgrind fuzz demo demo-c report addon blender-test clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -47,6 +48,18 @@ $(BUILD)/tests/%: tests/%.c tests/test_util.h tests/synth.h $(LIB_SRC) $(LIB_HDR
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -Icsrc -o $@ $< $(LIB_SRC) $(LDLIBS) \
 		$(if $(findstring test_oom,$@),$(WRAP_ALLOC))
+
+# The fuzz harness without libFuzzer: replays tests/fuzz/corpus (seeds and
+# every input the fuzzer ever failed on) in make test and make check.
+$(BUILD)/tests/fuzz_replay: tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(LIB_SRC) $(LIB_HDR) Makefile
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -D_GNU_SOURCE -Icsrc -o $@ \
+		tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(LIB_SRC) $(LDLIBS)
+
+# Coverage-guided fuzzing with libFuzzer (clang): FUZZ_SECONDS per run.
+FUZZ_SECONDS ?= 60
+fuzz: all
+	@sh scripts/fuzz.sh $(FUZZ_SECONDS)
 
 # test_oom sees every allocation the library's own code makes.
 WRAP_ALLOC := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc

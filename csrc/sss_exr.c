@@ -459,6 +459,7 @@ typedef struct read_job {
 	const sss_exr *exr;
 	const chan_ref *ref;     /* per source channel */
 	int tiled;
+	int b44;                 /* B44 or B44A: see raw_chunk */
 	int32_t lines;           /* scanlines per chunk */
 	int32_t tile_w, tile_h, tiles_x;
 	xio *io;
@@ -531,12 +532,28 @@ static void point_channels(const read_job *job, exr_decode_pipeline_t *dec,
 	}
 }
 
+/* A chunk stored raw: its data is as long as its unpacked size, which
+ * the file format (and the C++ library, so Blender) reads as "stored
+ * uncompressed" whatever the codec. OpenEXRCore 3.1 does so for every
+ * codec but B44 and B44A, which it runs through the B44 decoder anyway,
+ * in place: a raw B44 chunk (an all-float file, a 1-line last chunk)
+ * read as garbage or failed (found by tests/fuzz). The library has put
+ * the raw bytes in the unpacked buffer already; nothing to undo. */
+static exr_result_t raw_chunk(exr_decode_pipeline_t *dec)
+{
+	if (dec->unpacked_buffer != dec->packed_buffer)
+		memcpy(dec->unpacked_buffer, dec->packed_buffer,
+		       (size_t)dec->chunk.unpacked_size);
+	return EXR_ERR_SUCCESS;
+}
+
 /* Decodes chunks [c0, c1) with one pipeline; every channel goes straight
  * to its place in its pass (interleaved), halves and uints converted. */
 static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 {
 	read_job *job = arg;
 	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+	exr_result_t (*decompress)(exr_decode_pipeline_t *) = NULL;
 	int started = 0;
 	for (int32_t i = c0; i < c1 && !job_failed(job); i++) {
 		exr_chunk_info_t ci;
@@ -559,7 +576,11 @@ static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 				dec.channels[c].decode_to_ptr =
 					dec.channels[0].decode_to_ptr;
 			rv = exr_decoding_choose_default_routines(job->ctxt, 0, &dec);
+			decompress = dec.decompress_fn;
 		}
+		if (rv == EXR_ERR_SUCCESS && job->b44)
+			dec.decompress_fn = ci.packed_size == ci.unpacked_size
+			                    ? raw_chunk : decompress;
 		if (rv == EXR_ERR_SUCCESS)
 			point_channels(job, &dec, x0, y0);
 		if (rv == EXR_ERR_SUCCESS)
@@ -717,8 +738,12 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 	read_job job = {.ctxt = c, .exr = exr, .ref = ref, .io = &exr->io};
 	exr_storage_t storage = EXR_STORAGE_SCANLINE;
 	int32_t chunks = 0;
+	exr_compression_t comp = EXR_COMPRESSION_NONE;
 	exr_result_t rv = exr_get_storage(c, 0, &storage);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_compression(c, 0, &comp);
 	job.tiled = storage == EXR_STORAGE_TILED;
+	job.b44 = comp == EXR_COMPRESSION_B44 || comp == EXR_COMPRESSION_B44A;
 	if (rv == EXR_ERR_SUCCESS && job.tiled) {
 		/* Level 0 only: mip/rip levels below it are not needed. */
 		int32_t lw = 0, lh = 0;
@@ -1282,6 +1307,20 @@ typedef struct write_job {
 	int32_t first;               /* chunk of slot 0 in this round */
 } write_job;
 
+/* Float to uint as OpenEXRCore 3.1 converts when packing, but saturating
+ * at the top: its own conversion tests f > (float)UINT32_MAX, which is
+ * 2^32 itself, so 2^32 (what uint values from 0xFFFFFF80 up read as)
+ * went through an out-of-range cast and came back as 0 (found by
+ * tests/fuzz: a uint channel did not survive a round trip). */
+static uint32_t float_to_uint_sat(float f)
+{
+	if (!(f > 0.0f)) /* negative, zero or NaN */
+		return 0;
+	if (f >= 4294967296.0f)
+		return UINT32_MAX;
+	return (uint32_t)f;
+}
+
 static void encode_slots(void *arg, int32_t s0, int32_t s1)
 {
 	write_job *job = arg;
@@ -1294,12 +1333,35 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 		                  : exr_encoding_initialize(job->ctxt, job->part, ci,
 		                                            enc);
 		size_t y0 = (size_t)(ci->start_y - exr->data_window.min.y);
-		for (int k = 0; rv == EXR_ERR_SUCCESS && k < enc->channel_count;
-		     k++) {
+		/* uint channels are converted here (float_to_uint_sat) into one
+		 * staging block per chunk, a plane per uint channel. */
+		size_t plane = (size_t)exr->width * (size_t)(ci->height > 0
+		                                             ? ci->height : 0);
+		int nuint = 0;
+		for (int k = 0; rv == EXR_ERR_SUCCESS && k < enc->channel_count; k++)
+			nuint += enc->channels[k].data_type == EXR_PIXEL_UINT;
+		uint32_t *stage = NULL;
+		if (nuint > 0 && plane > 0 &&
+		    !(stage = malloc((size_t)nuint * plane * sizeof *stage)))
+			rv = EXR_ERR_OUT_OF_MEMORY;
+		for (int k = 0, u = 0; rv == EXR_ERR_SUCCESS &&
+		                       k < enc->channel_count; k++) {
 			exr_coding_channel_info_t *ch = &enc->channels[k];
 			const chan_ref *r = &job->ref[k];
 			size_t at = y0 * (size_t)exr->width * (size_t)r->count +
 			            (size_t)r->k;
+			if (ch->data_type == EXR_PIXEL_UINT && stage) {
+				uint32_t *dst = stage + (size_t)u++ * plane;
+				for (size_t i = 0; i < plane; i++)
+					dst[i] = float_to_uint_sat(
+						r->data[at + i * (size_t)r->count]);
+				ch->encode_from_ptr = (const uint8_t *)dst;
+				ch->user_pixel_stride = (int32_t)sizeof *dst;
+				ch->user_line_stride = exr->width * (int32_t)sizeof *dst;
+				ch->user_bytes_per_element = (int16_t)sizeof *dst;
+				ch->user_data_type = EXR_PIXEL_UINT;
+				continue;
+			}
 			ch->encode_from_ptr = (const uint8_t *)(r->data + at);
 			ch->user_pixel_stride = r->count * (int32_t)sizeof(float);
 			ch->user_line_stride = exr->width * r->count *
@@ -1316,6 +1378,7 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 		enc->write_fn = NULL;
 		if (rv == EXR_ERR_SUCCESS)
 			rv = exr_encoding_run(job->ctxt, job->part, enc);
+		free(stage); /* packed by now */
 		job->rv[s] = rv;
 	}
 }
@@ -1374,11 +1437,20 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 		for (int32_t s = 0; rv == EXR_ERR_SUCCESS && s < n; s++) {
 			*bad_y = info[first + s].start_y;
 			rv = job.rv[s];
+			/* A chunk whose data is as long as its unpacked size is
+			 * stored raw: readers take that length to mean "not
+			 * compressed". OpenEXRCore 3.1's ZIP and RLE encoders fall
+			 * back to the raw bytes only when the compressed ones are
+			 * longer, so a chunk that compressed to exactly its own
+			 * size was written compressed and read back as garbage
+			 * (found by tests/fuzz). The packed bytes are written then. */
+			const exr_encode_pipeline_t *e = &job.pipe[s];
+			int raw = e->compressed_bytes >= e->packed_bytes;
 			if (rv == EXR_ERR_SUCCESS)
 				rv = exr_write_scanline_chunk(
 					c, part, info[first + s].start_y,
-					job.pipe[s].compressed_buffer,
-					job.pipe[s].compressed_bytes);
+					raw ? e->packed_buffer : e->compressed_buffer,
+					raw ? e->packed_bytes : e->compressed_bytes);
 		}
 	}
 	for (int32_t s = 0; job.started && s < slots; s++)
@@ -1402,11 +1474,20 @@ static int needs_long_names(const sss_exr *exr,
 		for (int32_t k = 0; k < exr->passes[j].count; k++)
 			if (strlen(exr->passes[j].chan[k].name) > SHORT_NAME)
 				return 1;
-	for (int32_t i = 0; i < count; i++)
-		if (!is_structural(attrs[i]->name) &&
-		    (attrs[i]->name_length > SHORT_NAME ||
-		     attrs[i]->type_name_length > SHORT_NAME))
+	for (int32_t i = 0; i < count; i++) {
+		if (is_structural(attrs[i]->name))
+			continue;
+		if (attrs[i]->name_length > SHORT_NAME ||
+		    attrs[i]->type_name_length > SHORT_NAME)
 			return 1;
+		/* A copied channel list's own names count too: without the flag
+		 * the library refused a long one ("Text too long for file
+		 * flags") and the whole write failed (found by tests/fuzz). */
+		if (attrs[i]->type == EXR_ATTR_CHLIST)
+			for (int k = 0; k < attrs[i]->chlist->num_channels; k++)
+				if (attrs[i]->chlist->entries[k].name.length > SHORT_NAME)
+					return 1;
+	}
 	return 0;
 }
 
