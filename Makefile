@@ -53,13 +53,14 @@ $(BUILD)/tests/%: tests/%.c tests/test_util.h tests/synth.h $(LIB_SRC) $(LIB_HDR
 # every input the fuzzer ever failed on) in make test and make check.
 $(BUILD)/tests/fuzz_replay: tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(LIB_SRC) $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -D_GNU_SOURCE -Icsrc -o $@ \
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -D_GNU_SOURCE -Icsrc \
+		-DFUZZ_CORPUS='"$(abspath tests/fuzz/corpus)"' -o $@ \
 		tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(LIB_SRC) $(LDLIBS)
 
 # Coverage-guided fuzzing with libFuzzer (clang): FUZZ_SECONDS per run.
 FUZZ_SECONDS ?= 60
 fuzz: all
-	@sh scripts/fuzz.sh $(FUZZ_SECONDS)
+	@BUILD=$(BUILD) sh scripts/fuzz.sh $(FUZZ_SECONDS)
 
 # test_oom sees every allocation the library's own code makes.
 WRAP_ALLOC := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc
