@@ -122,6 +122,23 @@ static void run_case(const shape *sh, const struct poison *po, float radius,
 	synth_free(s);
 }
 
+/* The scattered diffuse light of one material on s with the default
+ * camera (caller frees); *status receives sss_apply's result. */
+static float *scatter_light(const synth *s, const sss_material *m,
+                            int method, sss_result *status)
+{
+	sss_options o;
+	sss_options_default(&o);
+	o.method = method;
+	sss_passes p = synth_passes(s);
+	sss_camera cam;
+	sss_camera_default(&cam);
+	float *light = calloc((size_t)3 * s->w * s->h, sizeof(float));
+	sss_image ol = {light, s->w, s->h, 3, 0};
+	*status = sss_apply(&p, &cam, m, 1, &o, NULL, &ol, NULL, 0);
+	return light;
+}
+
 /* A constant image stays constant even for absurd radii and tap counts. */
 static void test_constant_extremes(void)
 {
@@ -138,16 +155,8 @@ static void test_constant_extremes(void)
 				m.pass_index = 1;
 				m.radius[0] = m.radius[1] = m.radius[2] = radii[r];
 				m.taps = taps[t];
-				sss_options o;
-				sss_options_default(&o);
-				o.method = methods[mt];
-				sss_passes p = synth_passes(s);
-				sss_camera cam;
-				sss_camera_default(&cam);
-				float *light = calloc((size_t)3 * w * h, sizeof(float));
-				sss_image ol = {light, w, h, 3, 0};
-				sss_result res = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol,
-				                           NULL, 0);
+				sss_result res;
+				float *light = scatter_light(s, &m, methods[mt], &res);
 				double worst = 0;
 				for (size_t i = 0; i < (size_t)3 * w * h; i++)
 					worst = fmax(worst, fabs(light[i] - 0.7f));
@@ -231,16 +240,8 @@ static void test_energy(void)
 				m.gaussian_scale *= (float)scale;
 				m.jimenez_width *= (float)scale;
 				m.scatter_scale *= (float)scale;
-				sss_options o;
-				sss_options_default(&o);
-				o.method = methods[mt];
-				sss_passes p = synth_passes(s);
-				sss_camera cam;
-				sss_camera_default(&cam);
-				float *light = calloc((size_t)3 * w * h, sizeof(float));
-				sss_image ol = {light, w, h, 3, 0};
-				sss_result r = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol,
-				                         NULL, 0);
+				sss_result r;
+				float *light = scatter_light(s, &m, methods[mt], &r);
 				double sum[3] = {0, 0, 0};
 				for (size_t i = 0; i < (size_t)w * h; i++)
 					for (int c = 0; c < 3; c++)
