@@ -6,6 +6,8 @@
 #                 then the C tests again under ASan + UBSan
 #   make check    the C tests again under ASan + UBSan with -Werror
 #   make demo     render a small synthetic scene with SSS and write a PNG
+#   make compare  libsss against Cycles random walk and EEVEE on the three
+#                 bundled scenes: out/compare/SCENE/{sheet,plot}.png, results.*
 #   make clean
 #
 # Results must not depend on the compiler contracting a*b+c into an FMA:
@@ -24,12 +26,12 @@ LIB_INC := $(EXR_INC) -I/usr/include/cjson
 LDLIBS  := -lOpenEXRCore -lcjson -lm -pthread
 
 LIB_SRC   := $(sort $(filter-out csrc/sss_main.c,$(wildcard csrc/sss_*.c)))
-LIB_HDR   := csrc/sss.h csrc/sss_internal.h
+LIB_HDR   := csrc/sss.h csrc/sss_internal.h csrc/sss_blur1d.h
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps test check valgrind fuzz demo demo-c report addon blender-test clean
+.PHONY: all deps test check valgrind fuzz demo demo-c report addon blender-test compare clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -157,6 +159,29 @@ $(BUILD)/sss-report: examples/method_report.c tests/synth.h $(BUILD)/libsss.so
 # Separable against reference for Burley at three radii, with timings.
 report: $(BUILD)/sss-report
 	@$(BUILD)/sss-report 512
+
+# The speed/accuracy trade: each bundled scene (blender_scripts/build_scene.py
+# kinds head, marble, mixed) rendered with Cycles random walk, Cycles with SSS
+# off plus every method the library accepts, EEVEE's own SSS and EEVEE plus
+# our methods (blender_scripts/compare.py). COMPARE_ARGS=--quick for a fast run.
+COMPARE_SCENES ?= head marble mixed
+COMPARE_ARGS ?=
+compare: deps all
+	@mkdir -p out/compare $(BUILD)/compare
+	@for kind in $(COMPARE_SCENES); do \
+		log=$(BUILD)/compare/$$kind.log; \
+		$(BLENDER) -b --factory-startup --python-exit-code 1 \
+			--python blender_scripts/build_scene.py -- --kind $$kind \
+			--out $(BUILD)/compare/$$kind.blend >$$log 2>&1 && \
+		SSS_LIB=$(abspath $(BUILD))/libsss.so $(BLENDER) -b --factory-startup \
+			--python-exit-code 1 --python blender_scripts/compare.py -- \
+			--scene $(BUILD)/compare/$$kind.blend --out out/compare/$$kind \
+			$(COMPARE_ARGS) >>$$log 2>&1 || { tail -n 40 $$log; exit 1; }; \
+		grep -E '^(compare|scene|  )' $$log; \
+	done
+	@cat $(patsubst %,out/compare/%/summary.txt,$(COMPARE_SCENES)) \
+		>out/compare/summary.txt
+	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,results.csv,results.md} and out/compare/summary.txt"
 
 clean:
 	rm -rf $(BUILD)

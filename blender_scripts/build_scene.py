@@ -9,6 +9,13 @@ KIND:
   two    two scattering materials (skin, jade) and a plain one (floor),
          one of them driven by a texture through Base Color
   none   plain materials only: nothing scatters
+  head   the demo's head with four times its Subsurface (8 cm red
+         radius), so that scattering spans several pixels at 160x120
+         (compare.py's first bundled scene)
+  marble five white-marble objects at depths from 2.5 to 9 m, key light from
+         the side and a back light (compare.py's second bundled scene)
+  mixed  a skin sphere and a jade monkey (two profiles) behind a grey,
+         non-scattering pillar, side and back light (the third)
 Rendering is Cycles at low resolution and samples; denoising and light
 clamping are off so Blender's Combined is exactly the sum of its passes.
 """
@@ -25,7 +32,7 @@ from mathutils import Vector
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="build_scene.py")
-    p.add_argument("--kind", choices=("demo", "two", "none"), required=True)
+    p.add_argument("--kind", choices=("demo", "head", "two", "none", "marble", "mixed"), required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--samples", type=int, default=8)
@@ -69,9 +76,9 @@ def aim(obj, target):
     obj.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
 
 
-def build_demo(scene):
+def build_demo(scene, subsurface=0.02):
     skin = material("Skin", **{
-        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.02,
+        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": subsurface,
         "Subsurface Radius": (1.0, 0.35, 0.2),
         "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.45})
     bpy.ops.mesh.primitive_monkey_add(size=0.22, location=(0, 0, 0))
@@ -127,12 +134,127 @@ def build_two(scene, scatter=True):
     light("SUN", "Sun", 3.0, (0, 0, 5), (0.9, 0.3, 2.4))
 
 
+def random_walk(mat):
+    mat.node_tree.nodes["Principled BSDF"].subsurface_method = "RANDOM_WALK"
+    return mat
+
+
+def smooth(obj, levels=0):
+    if levels:
+        mod = obj.modifiers.new("smooth", "SUBSURF")
+        mod.levels = mod.render_levels = levels
+    for poly in obj.data.polygons:
+        poly.use_smooth = True
+    return obj
+
+
+def build_marble(scene):
+    """Marble at several depths: the same world-space radius covers fewer
+    pixels the farther the object is, so every method's depth handling
+    shows. An 80 cm mean free path (soap-like) keeps the kernel several pixels
+    wide even on the far objects at 160x120."""
+    marble = random_walk(material("Marble", **{
+        "Base Color": (0.83, 0.79, 0.75, 1.0), "Subsurface": 0.8,
+        "Subsurface Radius": (1.0, 0.85, 0.7),
+        "Subsurface Color": (0.9, 0.88, 0.84, 1.0), "Roughness": 0.25}))
+    floor = material("Floor", **{"Base Color": (0.12, 0.12, 0.13, 1.0),
+                                 "Roughness": 0.8})
+    shapes = (("sphere", (-1.3, -1.0, 0.35)), ("cube", (0.1, 0.2, 0.35)),
+              ("sphere", (1.6, 1.8, 0.35)), ("cylinder", (-0.6, 3.2, 0.35)),
+              ("sphere", (0.9, 5.0, 0.35)))
+    for kind, loc in shapes:
+        if kind == "sphere":
+            bpy.ops.mesh.primitive_uv_sphere_add(radius=0.35, location=loc,
+                                                 segments=48, ring_count=24)
+        elif kind == "cube":
+            bpy.ops.mesh.primitive_cube_add(size=0.6, location=loc,
+                                            rotation=(0, 0, 0.6))
+            bpy.context.active_object.modifiers.new("bevel", "BEVEL") \
+                .width = 0.04
+        else:
+            bpy.ops.mesh.primitive_cylinder_add(radius=0.3, depth=0.7,
+                                                location=loc, vertices=48)
+        obj = bpy.context.active_object
+        if kind != "cube":
+            smooth(obj)
+        assign(obj, marble)
+    bpy.ops.mesh.primitive_plane_add(size=30, location=(0, 2, 0))
+    assign(bpy.context.active_object, floor)
+    # A small sun: hard shadows and terminators, where scattering shows.
+    light("SUN", "Key", 4.0, (-4.0, -1.5, 2.5), (0, 0, 0))
+    scene.objects["Key"].data.angle = math.radians(1.0)
+    aim(scene.objects["Key"], (0, 1.5, 0.3))
+    light("AREA", "Back", 300.0, (1.5, 8.0, 1.2), (0, 0, 0), 1.5)
+    aim(scene.objects["Back"], (0, 1.5, 0.3))
+    cam = scene.camera
+    cam.location = (0.0, -3.6, 1.2)
+    aim(cam, (0.1, 1.5, 0.3))
+    cam.data.lens = 40
+
+
+def build_mixed(scene):
+    """Two profiles (skin, jade) and a non-scattering pillar in front of
+    both: scattering must not bleed across the pillar's silhouette."""
+    skin = random_walk(material("Skin", **{
+        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.5,
+        "Subsurface Radius": (1.0, 0.35, 0.2),
+        "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.45}))
+    jade = random_walk(material("Jade", **{
+        "Base Color": (0.3, 0.7, 0.4, 1.0), "Subsurface": 0.3,
+        "Subsurface Radius": (0.3, 1.0, 0.5),
+        "Subsurface Color": (0.35, 0.8, 0.5, 1.0), "Roughness": 0.2}))
+    tree = skin.node_tree
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 25.0
+    bump = tree.nodes.new("ShaderNodeBump")
+    bump.inputs["Strength"].default_value = 0.4
+    bump.inputs["Distance"].default_value = 0.02
+    tree.links.new(noise.outputs["Fac"], bump.inputs["Height"])
+    tree.links.new(bump.outputs["Normal"],
+                   tree.nodes["Principled BSDF"].inputs["Normal"])
+    grey = material("Pillar", **{"Base Color": (0.35, 0.35, 0.37, 1.0),
+                                 "Roughness": 0.6})
+    floor = material("Floor", **{"Base Color": (0.1, 0.1, 0.11, 1.0),
+                                 "Roughness": 0.8})
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.45, location=(-0.55, 0.3,
+                                                                0.45),
+                                         segments=48, ring_count=24)
+    assign(smooth(bpy.context.active_object), skin)
+    bpy.ops.mesh.primitive_monkey_add(size=0.8, location=(0.5, 0.4, 0.45),
+                                      rotation=(0, 0, 0.35))
+    assign(smooth(bpy.context.active_object, 2), jade)
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.09, depth=1.6,
+                                        location=(-0.12, -0.8, 0.8),
+                                        vertices=32)
+    assign(smooth(bpy.context.active_object), grey)
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    assign(bpy.context.active_object, floor)
+    # A small sun from the front right: the pillar's hard shadow crosses
+    # the skin sphere; a weak back light rims both.
+    light("SUN", "Key", 4.0, (1.8, -4.6, 2.5), (0, 0, 0))
+    scene.objects["Key"].data.angle = math.radians(1.0)
+    aim(scene.objects["Key"], (-0.55, 0.3, 0.45))
+    light("AREA", "Back", 80.0, (0.4, 2.6, 1.2), (0, 0, 0), 0.8)
+    aim(scene.objects["Back"], (0, 0.3, 0.45))
+    cam = scene.camera
+    cam.location = (0.0, -2.5, 0.8)
+    aim(cam, (0.0, 0.3, 0.45))
+    cam.data.lens = 50
+
+
 def main():
     args = parse_args()
     scene = bpy.context.scene
     clear(scene)
     if args.kind == "demo":
         build_demo(scene)
+    elif args.kind == "head":
+        build_demo(scene, subsurface=0.08)
+        random_walk(bpy.data.materials["Skin"])
+    elif args.kind == "marble":
+        build_marble(scene)
+    elif args.kind == "mixed":
+        build_mixed(scene)
     else:
         build_two(scene, scatter=args.kind == "two")
     scene.world.use_nodes = True

@@ -1,0 +1,180 @@
+"""Image error metrics for compare.py, numpy only (no bpy), so that plain
+pytest can check them (tests/python/test_compare_metrics.py).
+
+All images are linear scene-referred float RGB arrays (h, w, 3) and the
+error is measured against a reference image over a boolean mask (h, w) of
+the scattering pixels (material index of a scattering material, not
+background).
+
+- rmse: sqrt(mean over mask pixels and RGB of (img - ref)^2).
+- rel_mae: sum |img - ref| / sum |ref| over mask pixels and RGB (so 0.05
+  reads "5 % of the reference's light is wrong").
+- quarter resolution: both images are box-filtered over 4x4 pixel blocks
+  (all pixels of the block, so the light just outside the mask is included
+  as a display at that size would); a block counts when at least 75 % of
+  its pixels are in the mask. This separates noise (which averages away)
+  from bias (which does not).
+- max_err: the largest per-pixel max-over-RGB |img - ref| over the mask.
+- ssim: Wang et al. 2004 structural similarity with an 11x11 Gaussian
+  window (sigma 1.5, truncated at 5 pixels and renormalised at the image
+  border), K1 = 0.01, K2 = 0.03, on display-referred luminance: Rec.709
+  luminance of the image times the shared exposure, clipped to [0, 1] and
+  raised to 1/2.2, so L = 1. The SSIM map is averaged over the mask.
+"""
+import numpy as np
+
+QUARTER = 4
+QUARTER_COVERAGE = 0.75
+LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)
+
+
+def _check(img, ref, mask):
+    if img.shape != ref.shape or img.shape[:2] != mask.shape:
+        raise ValueError(f"shapes differ: {img.shape} {ref.shape} "
+                         f"{mask.shape}")
+    if not mask.any():
+        raise ValueError("the mask is empty: nothing scatters on screen")
+
+
+def rmse(img, ref, mask):
+    _check(img, ref, mask)
+    d = (img[mask] - ref[mask]).astype(np.float64)
+    return float(np.sqrt(np.mean(d * d)))
+
+
+def rel_mae(img, ref, mask):
+    _check(img, ref, mask)
+    den = float(np.sum(np.abs(ref[mask].astype(np.float64))))
+    num = float(np.sum(np.abs((img[mask] - ref[mask]).astype(np.float64))))
+    return num / den if den > 0 else float("inf") if num > 0 else 0.0
+
+
+def max_err(img, ref, mask):
+    _check(img, ref, mask)
+    return float(np.max(np.abs(img[mask] - ref[mask])))
+
+
+def downsample(img, f=QUARTER):
+    """Box filter over f x f blocks (the image is cut to a multiple of f)."""
+    h, w = img.shape[0] // f * f, img.shape[1] // f * f
+    a = img[:h, :w].astype(np.float64)
+    shape = (h // f, f, w // f, f) + a.shape[2:]
+    return a.reshape(shape).mean(axis=(1, 3))
+
+
+def quarter(img, ref, mask):
+    """(img, ref, mask) at quarter resolution (see the module doc)."""
+    m = downsample(mask.astype(np.float64)) >= QUARTER_COVERAGE
+    return downsample(img), downsample(ref), m
+
+
+def display_luma(img, exposure):
+    y = np.tensordot(img.astype(np.float64), LUMA, axes=([2], [0]))
+    return np.clip(y * exposure, 0.0, 1.0) ** (1 / 2.2)
+
+
+def gaussian_kernel(sigma=1.5, radius=5):
+    x = np.arange(-radius, radius + 1, dtype=np.float64)
+    k = np.exp(-0.5 * (x / sigma) ** 2)
+    return k / k.sum()
+
+
+def gaussian_blur(a, sigma=1.5, radius=5):
+    """Separable Gaussian, renormalised where the window leaves the image
+    (so a constant stays constant up to the border)."""
+    k = gaussian_kernel(sigma, radius)
+
+    def blur(x, axis):
+        x = np.moveaxis(x, axis, 0)
+        n = x.shape[0]
+        out = np.zeros_like(x)
+        for i, w in enumerate(k):
+            o = i - radius
+            lo, hi = max(0, -o), min(n, n - o)
+            if lo < hi:
+                out[lo:hi] += w * x[lo + o:hi + o]
+        return np.moveaxis(out, 0, axis)
+
+    ones = np.ones_like(a)
+    norm = blur(blur(ones, 0), 1)
+    return blur(blur(a, 0), 1) / norm
+
+
+def ssim_map(x, y, sigma=1.5, radius=5, k1=0.01, k2=0.03, L=1.0):
+    x = x.astype(np.float64)
+    y = y.astype(np.float64)
+    c1, c2 = (k1 * L) ** 2, (k2 * L) ** 2
+    mx, my = gaussian_blur(x, sigma, radius), gaussian_blur(y, sigma, radius)
+    sxx = gaussian_blur(x * x, sigma, radius) - mx * mx
+    syy = gaussian_blur(y * y, sigma, radius) - my * my
+    sxy = gaussian_blur(x * y, sigma, radius) - mx * my
+    return ((2 * mx * my + c1) * (2 * sxy + c2)) / \
+        ((mx * mx + my * my + c1) * (sxx + syy + c2))
+
+
+def ssim(img, ref, mask, exposure):
+    _check(img, ref, mask)
+    m = ssim_map(display_luma(img, exposure), display_luma(ref, exposure))
+    return float(np.mean(m[mask]))
+
+
+def exposure_for(ref, mask):
+    """One exposure for every image of a scene: the reference's 99th
+    percentile luminance over the mask maps to 0.85."""
+    y = np.tensordot(ref[mask].astype(np.float64), LUMA, axes=([1], [0]))
+    p = float(np.percentile(y, 99)) if y.size else 0.0
+    return 0.85 / p if p > 0 else 1.0
+
+
+def all_metrics(img, ref, mask, exposure):
+    qi, qr, qm = quarter(img, ref, mask)
+    have_q = bool(qm.any())
+    return {
+        "rmse": rmse(img, ref, mask),
+        "rel_mae": rel_mae(img, ref, mask),
+        "rmse_q": rmse(qi, qr, qm) if have_q else float("nan"),
+        "rel_mae_q": rel_mae(qi, qr, qm) if have_q else float("nan"),
+        "ssim": ssim(img, ref, mask, exposure),
+        "max_err": max_err(img, ref, mask),
+    }
+
+
+def interp_samples(samples, errors, target):
+    """The sample count at which a random-walk series (samples ascending,
+    errors against the reference) reaches `target`, interpolating
+    log(error) linearly in log(samples) between the bracketing points.
+    Returns (samples, how): how is "interpolated", "below" (already reached
+    at the lowest count: the lowest count is returned) or "extrapolated"
+    (past the highest count, along the slope of the last two points, or
+    1/sqrt(n) when there is only one)."""
+    pts = [(float(s), float(e)) for s, e in zip(samples, errors)
+           if e > 0 and np.isfinite(e)]
+    if not pts or not (target > 0 and np.isfinite(target)):
+        return float("nan"), "n/a"
+    if target >= pts[0][1]:
+        return pts[0][0], "below"
+    for (s0, e0), (s1, e1) in zip(pts, pts[1:]):
+        if e0 >= target >= e1 and e0 != e1:
+            t = (np.log(target) - np.log(e0)) / (np.log(e1) - np.log(e0))
+            return float(np.exp(np.log(s0) + t * (np.log(s1) -
+                                                  np.log(s0)))), \
+                "interpolated"
+    if len(pts) >= 2 and pts[-1][1] < pts[-2][1]:
+        (s0, e0), (s1, e1) = pts[-2], pts[-1]
+        slope = (np.log(e1) - np.log(e0)) / (np.log(s1) - np.log(s0))
+    else:
+        slope = -0.5
+        s1, e1 = pts[-1]
+    return float(np.exp(np.log(s1) + (np.log(target) - np.log(e1)) /
+                        slope)), "extrapolated"
+
+
+def time_at(samples, seconds, n):
+    """Render time at n samples from a least-squares line t = a + b n
+    through the measured (samples, seconds)."""
+    s = np.asarray(samples, dtype=np.float64)
+    t = np.asarray(seconds, dtype=np.float64)
+    if len(s) == 1:
+        return float(t[0] * n / s[0])
+    b, a = np.polyfit(s, t, 1)
+    return float(max(a + b * n, 0.0))

@@ -1,0 +1,80 @@
+"""The comparison's metrics (blender_scripts/compare_metrics.py) on
+synthetic images with known answers."""
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..",
+                                "blender_scripts"))
+import compare_metrics as cm  # noqa: E402
+
+
+def images(seed=0, h=32, w=40):
+    rng = np.random.default_rng(seed)
+    ref = rng.uniform(0.1, 1.0, (h, w, 3)).astype(np.float32)
+    mask = np.zeros((h, w), bool)
+    mask[4:28, 8:36] = True
+    return ref, mask
+
+
+def test_identical_images_have_no_error():
+    ref, mask = images()
+    m = cm.all_metrics(ref, ref, mask, 1.0)
+    assert m["rmse"] == m["rel_mae"] == m["max_err"] == 0
+    assert m["rmse_q"] == 0
+    assert m["ssim"] == pytest.approx(1.0)
+
+
+def test_known_offsets():
+    ref, mask = images()
+    img = ref + 0.1
+    assert cm.rmse(img, ref, mask) == pytest.approx(0.1, rel=1e-5)
+    assert cm.max_err(img, ref, mask) == pytest.approx(0.1, rel=1e-5)
+    expect = 0.1 * mask.sum() * 3 / ref[mask].sum()
+    assert cm.rel_mae(img, ref, mask) == pytest.approx(expect, rel=1e-5)
+    # Outside the mask nothing counts.
+    img = ref.copy()
+    img[~mask] += 5
+    assert cm.rmse(img, ref, mask) == 0
+
+
+def test_quarter_resolution_averages_noise_away_but_not_bias():
+    ref, mask = images()
+    ref[:] = 0.5
+    rng = np.random.default_rng(1)
+    noisy = ref + rng.choice([-0.1, 0.1], ref.shape).astype(np.float32)
+    biased = ref + 0.1
+    assert cm.rmse(noisy, ref, mask) == pytest.approx(0.1, rel=1e-4)
+    qi, qr, qm = cm.quarter(noisy, ref, mask)
+    assert qm.sum() == (24 // 4) * (28 // 4)
+    assert cm.rmse(qi, qr, qm) < 0.05
+    qi, qr, qm = cm.quarter(biased, ref, mask)
+    assert cm.rmse(qi, qr, qm) == pytest.approx(0.1, rel=1e-4)
+
+
+def test_ssim_properties():
+    ref, mask = images()
+    x = cm.display_luma(ref, 1.0)
+    # A constant image stays constant through the renormalised window.
+    blurred = cm.gaussian_blur(np.full((9, 7), 0.3))
+    assert np.allclose(blurred, 0.3)
+    assert cm.gaussian_kernel().sum() == pytest.approx(1.0)
+    noisy = ref + np.random.default_rng(2).normal(0, 0.05, ref.shape)
+    worse = ref + np.random.default_rng(2).normal(0, 0.2, ref.shape)
+    s1 = cm.ssim(noisy.astype(np.float32), ref, mask, 1.0)
+    s2 = cm.ssim(worse.astype(np.float32), ref, mask, 1.0)
+    assert 1 > s1 > s2 > 0
+    assert np.all(cm.ssim_map(x, x) == pytest.approx(1.0))
+
+
+def test_interp_samples():
+    s = [16, 64, 256]
+    e = [0.4, 0.2, 0.1]  # 1/sqrt(n)
+    assert cm.interp_samples(s, e, 0.2) == (pytest.approx(64), "interpolated")
+    assert cm.interp_samples(s, e, 0.2828)[0] == pytest.approx(32, rel=1e-3)
+    assert cm.interp_samples(s, e, 0.5) == (16, "below")
+    n, how = cm.interp_samples(s, e, 0.05)
+    assert how == "extrapolated" and n == pytest.approx(1024, rel=1e-6)
+    assert cm.time_at([16, 64], [1.0, 4.0], 32) == pytest.approx(2.0)
