@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 1
+#define SSS_ABI_VERSION 2
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -246,8 +246,11 @@ SSS_API sss_result sss_kernel_1d(const sss_material *mat,
 
 enum sss_method {
 	SSS_METHOD_SEPARABLE = 0, /* two 1-D passes, all lobes at once */
-	SSS_METHOD_SEPARABLE_EXACT = 1, /* reserved: per-lobe passes */
-	SSS_METHOD_DISK = 2,      /* reserved: stratified disk sampling */
+	SSS_METHOD_SEPARABLE_EXACT = 1, /* two 1-D passes per Gaussian lobe:
+	                                   exact for sums of Gaussians; Burley
+	                                   is fitted with 6 lobes */
+	SSS_METHOD_DISK = 2,      /* stratified inverse-CDF disk sampling,
+	                             up to `samples` samples per pixel */
 	SSS_METHOD_REFERENCE = 3  /* brute-force 2-D, true distances: slow */
 };
 
@@ -259,6 +262,9 @@ typedef struct sss_options {
 	int32_t num_threads;     /* 0 = all cores, 1..256 */
 	double background_depth; /* > 0: depth >= this is background (1e9) */
 	int32_t max_support_px;  /* >= 1: cap on a kernel's half-width */
+	int32_t samples;         /* SSS_METHOD_DISK: most samples per pixel,
+	                            1..4096 (64); a pixel takes
+	                            pi R^2 / 4 for a kernel R pixels wide */
 } sss_options;
 
 SSS_API void sss_options_default(sss_options *opt);
@@ -401,6 +407,7 @@ typedef struct sss_process_options {
 	float radius_scale;    /* >= 0, multiplies the scene's (default 1) */
 	int32_t num_threads;   /* 0..256, or -1 = the scene's */
 	sss_exr_options exr;   /* size caps and output compression */
+	int32_t samples;       /* 1..4096, or -1 = the scene's (disk method) */
 } sss_process_options;
 
 typedef struct sss_timings {

@@ -94,12 +94,12 @@ static sss_result check_options(const sss_options *o, char *errbuf,
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: struct_size %u, "
 		             "expected %zu (use sss_options_default)", o->struct_size,
 		             sizeof *o);
-	if (o->method == SSS_METHOD_SEPARABLE_EXACT ||
-	    o->method == SSS_METHOD_DISK)
+	if (o->method == SSS_METHOD_DISK)
 		return FAILX(SSS_ERR_UNSUPPORTED, "options: method %d is not "
 		             "available in this version", o->method);
 	if (o->method != SSS_METHOD_SEPARABLE &&
-	    o->method != SSS_METHOD_REFERENCE)
+	    o->method != SSS_METHOD_SEPARABLE_EXACT &&
+	    o->method != SSS_METHOD_DISK && o->method != SSS_METHOD_REFERENCE)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: unknown method %d",
 		             o->method);
 	if (!(isfinite(o->radius_scale) && o->radius_scale >= 0.0f))
@@ -117,6 +117,9 @@ static sss_result check_options(const sss_options *o, char *errbuf,
 	if (o->max_support_px < 1)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: max_support_px %d "
 		             "must be >= 1", o->max_support_px);
+	if (o->samples < 1 || o->samples > 4096)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: samples %d must be "
+		             "1..4096", o->samples);
 	return SSS_OK;
 }
 
@@ -303,8 +306,14 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	if (material_count > 0) {
 		if (opt.method == SSS_METHOD_REFERENCE)
 			r = sss__reference(&job, opt.num_threads);
+		else if (opt.method == SSS_METHOD_SEPARABLE_EXACT)
+			r = sss__separable_exact(&job, materials, material_count, &opt,
+			                         cam->unit_scale);
 		else
 			r = sss__separable(&job, opt.num_threads);
+		if (r == SSS_ERR_OUT_OF_MEMORY)
+			FAILX(r, "cannot allocate working memory for a %dx%d image",
+			      w, h);
 		if (r)
 			goto done;
 	}

@@ -87,6 +87,27 @@ int32_t sss__tap_layout(int32_t taps, double r, sss__tap *tap);
 sss_result sss__separable(const sss__job *job, int32_t num_threads);
 sss_result sss__reference(const sss__job *job, int32_t num_threads);
 
+/* The per-lobe separable method (sss_lobes.c): materials[m] is the
+ * material kernels[m] was built from; fits Burley with Gaussians. */
+sss_result sss__separable_exact(const sss__job *job,
+                                const sss_material *materials,
+                                int32_t material_count,
+                                const sss_options *opt, double unit_scale);
+/* Burley (d = 1) truncated at `truncate` as SSS__BURLEY_LOBES Gaussian
+ * lobes: their standard deviations and weights (summing to 1), fitted to
+ * the truncated radial CDF (sss_lobes.c). Returns the lobe count. */
+#define SSS__BURLEY_LOBES 6
+int sss__burley_lobes(double truncate, double sigma[], double weight[]);
+
+/* Channel c of a material as a sum of 2-D Gaussians in scene units (as
+ * sss__kernel_build scales it): fills variances and weights (summing to 1)
+ * and returns their count; returns 0 for Burley with *burley_d set to d in
+ * scene units (0 for a channel that does not scatter). (sss_profile.c) */
+int sss__profile_gaussians(const sss_material *mat, const sss_options *opt,
+                           double unit_scale, int c,
+                           double var[SSS_MAX_GAUSSIANS],
+                           double w[SSS_MAX_GAUSSIANS], double *burley_d);
+
 /* out = out + mix (blurred - out) per channel; mix 0 leaves out untouched
  * bit for bit and mix 1 gives blurred exactly. */
 static inline void sss__blend_pixel(const sss__kernel *k, const float *blurred,

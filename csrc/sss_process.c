@@ -25,6 +25,7 @@ void sss_process_options_default(sss_process_options *opt)
 	opt->radius_scale = 1.0f;
 	opt->num_threads = -1;
 	sss_exr_options_default(&opt->exr);
+	opt->samples = -1;
 }
 
 /* The library passes pixels with a bad depth through one by one; a Depth
@@ -116,6 +117,8 @@ sss_result sss_process_exr(const char *in, const char *out,
 		o.method = opt.method;
 	if (opt.num_threads >= 0)
 		o.num_threads = opt.num_threads;
+	if (opt.samples >= 0)
+		o.samples = opt.samples;
 	o.radius_scale = o.radius_scale * opt.radius_scale;
 	int32_t count;
 	const sss_material *mats = sss_scene_materials(scene, &count);

@@ -370,6 +370,25 @@ sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
 	return SSS_OK;
 }
 
+int sss__profile_gaussians(const sss_material *mat, const sss_options *opt,
+                           double unit_scale, int c,
+                           double var[SSS_MAX_GAUSSIANS],
+                           double w[SSS_MAX_GAUSSIANS], double *burley_d)
+{
+	channel ch;
+	double len = (double)opt->radius_scale / unit_scale;
+	channel_make(mat, c, len, odd_taps(mat->taps > 0 ? mat->taps : opt->taps),
+	             &ch);
+	*burley_d = ch.burley ? ch.d : 0.0;
+	if (ch.burley)
+		return 0;
+	for (int i = 0; i < ch.n; i++) {
+		var[i] = ch.var[i];
+		w[i] = ch.w[i];
+	}
+	return ch.n;
+}
+
 sss_result sss_material_support(const sss_material *mat, double *metres)
 {
 	if (!mat || !metres)

@@ -80,6 +80,7 @@ void sss_options_default(sss_options *opt)
 	opt->num_threads = 0;
 	opt->background_depth = 1e9;
 	opt->max_support_px = 256;
+	opt->samples = 64;
 }
 
 void sss_camera_default(sss_camera *cam)

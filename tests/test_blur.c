@@ -11,7 +11,9 @@
 
 static const int kinds[] = {SSS_PROFILE_BURLEY, SSS_PROFILE_GAUSSIANS,
                             SSS_PROFILE_JIMENEZ, SSS_PROFILE_NEAR_FAR};
-static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE};
+static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE,
+                               SSS_METHOD_SEPARABLE_EXACT};
+#define NMETHODS (sizeof methods / sizeof *methods)
 
 /* Pixels per metre at depth z for the default camera (36 mm sensor across
  * the width, 50 mm lens). */
@@ -111,7 +113,7 @@ static void test_constant(void)
 {
 	int w = 40, h = 30;
 	for (size_t k = 0; k < 4; k++)
-		for (size_t mt = 0; mt < 2; mt++)
+		for (size_t mt = 0; mt < NMETHODS; mt++)
 			for (int tex = 0; tex < 2; tex++) {
 				synth *s = synth_new(w, h);
 				for (int y = 0; y < h; y++)
@@ -164,7 +166,7 @@ static void test_identity(void)
 	}
 	sss_options o = options(SSS_METHOD_SEPARABLE);
 	run base = apply(s, NULL, 0, &o);
-	for (size_t mt = 0; mt < 2; mt++)
+	for (size_t mt = 0; mt < NMETHODS; mt++)
 		for (int variant = 0; variant < 3; variant++)
 			for (int tex = 0; tex < 2; tex++) {
 				sss_material m = material_px(SSS_PROFILE_BURLEY, 1, 8, w, 2);
@@ -200,7 +202,7 @@ static void test_impulse_symmetry(void)
 {
 	int w = 33, h = 33;
 	for (size_t k = 0; k < 4; k++)
-		for (size_t mt = 0; mt < 2; mt++)
+		for (size_t mt = 0; mt < NMETHODS; mt++)
 			for (int px = 6; px <= 60; px += 54) { /* dense and sparse */
 				synth *s = synth_new(w, h);
 				synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
@@ -335,7 +337,7 @@ static double spread_x(const float *light, int w, int y, int x0, int x1,
 static void test_depth(void)
 {
 	int w = 96, h = 48;
-	for (size_t mt = 0; mt < 2; mt++) {
+	for (size_t mt = 0; mt < NMETHODS; mt++) {
 		synth *s = synth_new(w, h);
 		synth_plane(s, 0, 0, 48, h, 2.0f, 1.0f);
 		synth_plane(s, 48, 0, w, h, 4.0f, 1.0f);
@@ -372,7 +374,7 @@ static void test_depth(void)
 static void test_materials(void)
 {
 	int w = 80, h = 40;
-	for (size_t mt = 0; mt < 2; mt++) {
+	for (size_t mt = 0; mt < NMETHODS; mt++) {
 		synth *s = synth_new(w, h);
 		synth_plane(s, 0, 0, 40, h, 2.0f, 1.0f);
 		synth_plane(s, 40, 0, 70, h, 2.0f, 2.0f);
@@ -432,7 +434,7 @@ static void test_threads(void)
 	synth_noise(s, 0, 1, 21);
 	sss_material m[2] = {material_px(SSS_PROFILE_BURLEY, 1, 40, w, 2),
 	                     material_px(SSS_PROFILE_JIMENEZ, 2, 7, w, 2)};
-	for (size_t mt = 0; mt < 2; mt++) {
+	for (size_t mt = 0; mt < NMETHODS; mt++) {
 		sss_options o = options(methods[mt]);
 		o.num_threads = 1;
 		run one = apply(s, m, 2, &o);
@@ -586,7 +588,7 @@ static void test_position_pass(void)
 		}
 	synth_noise(s, 0, 1, 13);
 	sss_material m = material_px(SSS_PROFILE_BURLEY, 1, 10, w, 2);
-	for (size_t mt = 0; mt < 2; mt++) {
+	for (size_t mt = 0; mt < NMETHODS; mt++) {
 		sss_options o = options(methods[mt]);
 		run with = apply(s, &m, 1, &o);
 		float *keep = s->position;

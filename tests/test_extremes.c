@@ -15,7 +15,9 @@
 #include <string.h>
 #include <unistd.h>
 
-static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE};
+static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE,
+                               SSS_METHOD_SEPARABLE_EXACT};
+#define NMETHODS (sizeof methods / sizeof *methods)
 
 typedef struct shape {
 	int w, h;
@@ -144,7 +146,7 @@ static void test_constant_extremes(void)
 {
 	for (size_t r = 0; r < sizeof radii / sizeof *radii; r++)
 		for (size_t t = 0; t < sizeof taps / sizeof *taps; t++)
-			for (size_t mt = 0; mt < 2; mt++) {
+			for (size_t mt = 0; mt < NMETHODS; mt++) {
 				int w = 13, h = 11;
 				synth *s = synth_new(w, h);
 				synth_plane(s, 0, 0, w, h, 1.0f, 1.0f);
@@ -217,7 +219,7 @@ static void test_energy(void)
 	 * the image, or border renormalisation (by design) adds energy. */
 	int w = 53, h = 53;
 	for (size_t k = 0; k < 4; k++)
-		for (size_t mt = 0; mt < 2; mt++)
+		for (size_t mt = 0; mt < NMETHODS; mt++)
 			for (size_t t = 0; t < 3; t++) {
 				/* Taps mean nothing to the reference. */
 				if (methods[mt] == SSS_METHOD_REFERENCE && t != 1)
@@ -267,7 +269,7 @@ int main(void)
 		for (size_t b = 0; b < sizeof poisons / sizeof *poisons; b++)
 			for (size_t c = 0; c < sizeof radii / sizeof *radii; c++)
 				for (size_t d = 0; d < sizeof taps / sizeof *taps; d++)
-					for (size_t e = 0; e < 2; e++) {
+					for (size_t e = 0; e < NMETHODS; e++) {
 						/* The big image: the non-finite and huge values,
 						 * three radii, default taps. */
 						if (shapes[a].w > 100 &&

@@ -5,7 +5,7 @@ import ctypes
 import os
 import threading
 
-ABI_VERSION = 1  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 2  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -34,7 +34,8 @@ class ProcessOptions(ctypes.Structure):
                 ("method", ctypes.c_int32),
                 ("radius_scale", ctypes.c_float),
                 ("num_threads", ctypes.c_int32),
-                ("exr", ExrOptions)]
+                ("exr", ExrOptions),
+                ("samples", ctypes.c_int32)]
 
 
 class Timings(ctypes.Structure):
@@ -153,7 +154,7 @@ class Scene:
         self.close()
 
     def process(self, input_exr, output_exr, *, method=None,
-                radius_scale=1.0, threads=None, layer=None):
+                radius_scale=1.0, threads=None, layer=None, samples=None):
         """One frame through the library; returns the timings as a dict.
         Releases the GIL for the duration (ctypes does)."""
         lib = library()
@@ -164,6 +165,8 @@ class Scene:
         opt.radius_scale = radius_scale
         if threads is not None:
             opt.num_threads = threads
+        if samples is not None:
+            opt.samples = samples
         if layer:
             opt.layer = layer.encode()
         timings = Timings()
