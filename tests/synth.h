@@ -123,6 +123,28 @@ static inline void synth_plane(synth *s, int x0, int y0, int x1, int y1,
 		}
 }
 
+/* A sphere of radius `radius` centred on the view axis at depth `zc`, seen
+ * by the default camera (50 mm lens, 36 mm sensor fit to the width), with
+ * material index m: planar depth where the ray hits, background elsewhere. */
+static inline void synth_sphere(synth *s, float zc, float radius, float m)
+{
+	double f = s->w * 50.0 / 36.0;
+	for (int y = 0; y < s->h; y++)
+		for (int x = 0; x < s->w; x++) {
+			double dx = (x + 0.5 - s->w / 2.0) / f;
+			double dy = (s->h / 2.0 - (y + 0.5)) / f;
+			/* |t (dx, dy, 1) - (0, 0, zc)|^2 = radius^2, nearest t. */
+			double a = dx * dx + dy * dy + 1.0, b = -2.0 * zc;
+			double c = (double)zc * zc - (double)radius * radius;
+			double disc = b * b - 4.0 * a * c;
+			if (disc < 0.0)
+				continue;
+			size_t i = (size_t)y * s->w + x;
+			s->depth[i] = (float)((-b - sqrt(disc)) / (2.0 * a));
+			s->index[i] = m;
+		}
+}
+
 /* Random diffuse light in [lo, hi) on every channel. */
 static inline void synth_noise(synth *s, float lo, float hi, uint32_t seed)
 {
