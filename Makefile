@@ -87,7 +87,7 @@ test: deps all $(TESTS) addon
 
 # Valgrind memcheck on the C tests whose run stays short under it (the
 # blur and extreme-value tests run under ASan instead: too slow here).
-VALGRIND_TESTS := $(filter-out %/test_blur %/test_extremes,$(TESTS))
+VALGRIND_TESTS := $(filter-out %/test_blur %/test_extremes %/test_methods,$(TESTS))
 valgrind: $(VALGRIND_TESTS)
 	@TEST_RUNNER="valgrind -q --error-exitcode=99 --leak-check=full \
 		--errors-for-leak-kinds=definite" \

@@ -170,11 +170,14 @@ def interp_samples(samples, errors, target):
 
 
 def time_at(samples, seconds, n):
-    """Render time at n samples from a least-squares line t = a + b n
-    through the measured (samples, seconds)."""
+    """Render time at n samples: piecewise linear between the measured
+    (samples, seconds), proportional to the nearest end outside them."""
     s = np.asarray(samples, dtype=np.float64)
     t = np.asarray(seconds, dtype=np.float64)
-    if len(s) == 1:
+    order = np.argsort(s)
+    s, t = s[order], t[order]
+    if n < s[0]:
         return float(t[0] * n / s[0])
-    b, a = np.polyfit(s, t, 1)
-    return float(max(a + b * n, 0.0))
+    if n > s[-1]:
+        return float(t[-1] * n / s[-1])
+    return float(np.interp(n, s, t))

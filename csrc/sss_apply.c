@@ -94,9 +94,6 @@ static sss_result check_options(const sss_options *o, char *errbuf,
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: struct_size %u, "
 		             "expected %zu (use sss_options_default)", o->struct_size,
 		             sizeof *o);
-	if (o->method == SSS_METHOD_DISK)
-		return FAILX(SSS_ERR_UNSUPPORTED, "options: method %d is not "
-		             "available in this version", o->method);
 	if (o->method != SSS_METHOD_SEPARABLE &&
 	    o->method != SSS_METHOD_SEPARABLE_EXACT &&
 	    o->method != SSS_METHOD_DISK && o->method != SSS_METHOD_REFERENCE)
@@ -309,6 +306,8 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		else if (opt.method == SSS_METHOD_SEPARABLE_EXACT)
 			r = sss__separable_exact(&job, materials, material_count, &opt,
 			                         cam->unit_scale);
+		else if (opt.method == SSS_METHOD_DISK)
+			r = sss__disk(&job, opt.samples, opt.num_threads);
 		else
 			r = sss__separable(&job, opt.num_threads);
 		if (r == SSS_ERR_OUT_OF_MEMORY)

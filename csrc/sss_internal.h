@@ -98,6 +98,9 @@ sss_result sss__separable_exact(const sss__job *job,
  * the truncated radial CDF (sss_lobes.c). Returns the lobe count. */
 #define SSS__BURLEY_LOBES 6
 int sss__burley_lobes(double truncate, double sigma[], double weight[]);
+/* The stochastic disk method (sss_disk.c), at most `samples` per pixel. */
+sss_result sss__disk(const sss__job *job, int32_t samples,
+                     int32_t num_threads);
 
 /* Channel c of a material as a sum of 2-D Gaussians in scene units (as
  * sss__kernel_build scales it): fills variances and weights (summing to 1)

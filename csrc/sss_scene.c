@@ -631,11 +631,12 @@ done:
 
 enum {
 	T_VERSION, T_CAMERA, T_UNIT_SCALE, T_METHOD, T_RADIUS_SCALE, T_TAPS,
-	T_THREADS, T_BACKGROUND_DEPTH, T_MAX_SUPPORT_PX, T_MATERIALS, T_COUNT
+	T_THREADS, T_BACKGROUND_DEPTH, T_MAX_SUPPORT_PX, T_MATERIALS, T_SAMPLES,
+	T_COUNT
 };
 static const char *const top_keys[T_COUNT] = {
 	"version", "camera", "unit_scale", "method", "radius_scale", "taps",
-	"threads", "background_depth", "max_support_px", "materials",
+	"threads", "background_depth", "max_support_px", "materials", "samples",
 };
 
 static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
@@ -688,6 +689,9 @@ static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 	if (f[T_MAX_SUPPORT_PX] &&
 	    (r = get_int(c, f[T_MAX_SUPPORT_PX], "max_support_px", 1, INT32_MAX,
 	                 &opt->max_support_px)))
+		return r;
+	if (f[T_SAMPLES] && (r = get_int(c, f[T_SAMPLES], "samples", 1, 4096,
+	                                 &opt->samples)))
 		return r;
 	if (f[T_MATERIALS] && (r = parse_materials(c, f[T_MATERIALS], sc)))
 		return r;

@@ -161,8 +161,8 @@ static void test_apply_arguments(void)
 	          opt.radius_scale = 1, "radius_scale");
 	BAD_APPLY("apply-11", SSS_ERR_INVALID_ARGUMENT, opt.taps = 0,
 	          opt.taps = 33, "taps");
-	BAD_APPLY("apply-12", SSS_ERR_UNSUPPORTED,
-	          opt.method = SSS_METHOD_DISK, opt.method = 0, "method");
+	BAD_APPLY("apply-12", SSS_ERR_INVALID_ARGUMENT, opt.samples = 0,
+	          opt.samples = 64, "samples");
 	BAD_APPLY("apply-13", SSS_ERR_INVALID_ARGUMENT, opt.method = 17,
 	          opt.method = 0, "method");
 	BAD_APPLY("apply-14", SSS_ERR_INVALID_ARGUMENT, cam.lens_mm = 0,

@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 static const int methods[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_REFERENCE,
-                               SSS_METHOD_SEPARABLE_EXACT};
+                               SSS_METHOD_SEPARABLE_EXACT, SSS_METHOD_DISK};
 #define NMETHODS (sizeof methods / sizeof *methods)
 
 typedef struct shape {
@@ -221,8 +221,11 @@ static void test_energy(void)
 	for (size_t k = 0; k < 4; k++)
 		for (size_t mt = 0; mt < NMETHODS; mt++)
 			for (size_t t = 0; t < 3; t++) {
-				/* Taps mean nothing to the reference. */
-				if (methods[mt] == SSS_METHOD_REFERENCE && t != 1)
+				/* Taps mean nothing to the reference. The disk method
+				 * conserves an impulse's light only on average (noise,
+				 * see tests/test_methods.c, disk-energy). */
+				if ((methods[mt] == SSS_METHOD_REFERENCE && t != 1) ||
+				    methods[mt] == SSS_METHOD_DISK)
 					continue;
 				synth *s = synth_new(w, h);
 				synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);

@@ -228,8 +228,8 @@ static void test_defaults(void)
 		sss_scene_free(sc);
 	}
 
-	/* Omitted "materials" gives an empty table; method names map to the
-	 * enum even for methods sss_apply does not run yet. */
+	/* Omitted "materials" gives an empty table; every method name maps to
+	 * the enum. */
 	sc = NULL;
 	CHECK_STATUS("def-method", SSS_OK,
 	             parse("{\"method\": \"disk\", \"version\": 1.0}", &sc, NULL,
@@ -243,6 +243,26 @@ static void test_defaults(void)
 	                   err, sizeof err));
 	CHECK("def-method-4", sc && sss_scene_options(sc)->method ==
 	      SSS_METHOD_SEPARABLE_EXACT, "separable-exact");
+	sss_scene_free(sc);
+
+	/* The disk method's budget: default, set, range named. */
+	sc = NULL;
+	CHECK_STATUS("def-samples", SSS_OK,
+	             parse("{\"method\": \"disk\", \"samples\": 256}", &sc,
+	                   NULL, 0, err, sizeof err));
+	CHECK("def-samples-2", sc && sss_scene_options(sc)->samples == 256,
+	      "samples");
+	sss_scene_free(sc);
+	sc = NULL;
+	CHECK_STATUS("def-samples-3", SSS_OK,
+	             parse("{}", &sc, NULL, 0, err, sizeof err));
+	CHECK("def-samples-4", sc && sss_scene_options(sc)->samples == 64,
+	      "default samples");
+	sss_scene_free(sc);
+	sc = NULL;
+	CHECK_STATUS("def-samples-5", SSS_ERR_INVALID_ARGUMENT,
+	             parse("{\"samples\": 0}", &sc, NULL, 0, err, sizeof err));
+	CHECK("def-samples-6", strstr(err, "samples") != NULL, "'%s'", err);
 	sss_scene_free(sc);
 
 	/* clip_end alone never moves background_depth. */

@@ -117,7 +117,7 @@ def scene_description(scene, found):
             "pixel_aspect_y": scene.render.pixel_aspect_y,
         },
         "unit_scale": scene.unit_settings.scale_length or 1.0,
-        "method": scene.sss.method.lower(),
+        "method": scene.sss.method.lower().replace("_", "-"),
         "taps": scene.sss.taps | 1,
         "materials": [_material_entry(f) for f in found.found],
     }
