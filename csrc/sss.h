@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 2
+#define SSS_ABI_VERSION 3
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -117,7 +117,29 @@ typedef struct sss_passes {
 	sss_image depth;     /* required, 1 channel: planar view Z, scene units */
 	sss_image index_ma;  /* required, 1 channel: material pass_index */
 	sss_image position;  /* optional XYZ world position, scene units */
+	/* Transmission (optional; see sss_transmission). The light arriving
+	 * at each pixel through the object from behind: DiffDir and DiffInd
+	 * of a view layer whose material override is a white Translucent BSDF
+	 * (SSS_BACKLIGHT_LAYER in an EXR). Without back_dir nothing is
+	 * transmitted. */
+	sss_image back_dir;  /* RGB */
+	sss_image back_ind;  /* RGB, optional */
+	sss_image thickness; /* 1 channel: the object's local thickness behind
+	                        the pixel, scene units; required with back_dir
+	                        when a material transmits */
+	sss_image facing;    /* optional, 1 channel: N . V in [0, 1] (the
+	                        fast model's view term; 1 when absent) */
 } sss_passes;
+
+/* Names the add-on and sss_process_exr use in Blender's multilayer EXR: the
+ * back-light view layer, and its AOVs: SSSThicknessSq (thickness squared,
+ * scene units^2: the mean over samples of AO(inside, Distance D) x D^2,
+ * which is t^2 for a slab of thickness t < D), or SSSThickness (scene
+ * units), and SSSFacing (N . V). */
+#define SSS_BACKLIGHT_LAYER "SSSBackLight"
+#define SSS_THICKNESS_SQ_PASS "SSSThicknessSq"
+#define SSS_THICKNESS_PASS "SSSThickness"
+#define SSS_FACING_PASS "SSSFacing"
 
 /* --------------------------------------------------------------- camera */
 
@@ -174,6 +196,34 @@ enum sss_texturing {
 
 #define SSS_MAX_GAUSSIANS 8
 
+/* Back-lit transmission: light that arrives at the back of a thin part
+ * (sss_passes.back_dir + back_ind, B) and crosses its thickness t is added
+ * to the diffuse light BEFORE the blur, so it is softened like the rest:
+ * L' = L + strength x T(t) x B per channel, with T <= 1 (the diffuse colour,
+ * i.e. the albedo, multiplies it after the blur as it does all light).
+ * Thickness NaN or negative means "unknown": nothing is added there. */
+enum sss_transmission {
+	SSS_TRANSMISSION_OFF = 0,
+	SSS_TRANSMISSION_BURLEY = 1,  /* the profile's own transmittance: its
+	                                 mass beyond a plane at distance t.
+	                                 Burley: e^{-t/d}/4 + 3 e^{-t/3d}/4;
+	                                 Gaussian sums: sum w_i e^{-t^2/2v_i};
+	                                 times transmission_color */
+	SSS_TRANSMISSION_JIMENEZ = 2, /* Jimenez et al. 2010: d'Eon's skin
+	                                 sum w_i e^{-s^2/v_i}, s (mm) = t x 8.25
+	                                 (1 - translucency) / jimenez_width;
+	                                 times transmission_color */
+	SSS_TRANSMISSION_BEER_LAMBERT = 3, /* transmission_color^(t / distance):
+	                                 the colour seen through
+	                                 transmission_distance */
+	SSS_TRANSMISSION_FAST = 4     /* GDC 2011: (saturate((1 - distortion)
+	                                 N.V)^power x scale + ambient) x
+	                                 max(0, 1 - t / distance), at most 1,
+	                                 times transmission_color. L = -N: the
+	                                 light that crossed a part leaves it
+	                                 along its normal (no per-pixel L) */
+};
+
 /* One row of the per-material table. Fill with sss_material_default(),
  * which sets the kind's published defaults, then change what you need. */
 typedef struct sss_material {
@@ -205,6 +255,21 @@ typedef struct sss_material {
 	float near_far_balance;/* 0..1: 1 = all near, 0 = all far */
 	float near_sigma[3];   /* mm per channel, > 0 */
 	float far_sigma[3];    /* mm per channel, > 0 */
+
+	/* Transmission (sss_transmission; all kinds). Lengths are metres and
+	 * follow sss_options.radius_scale like the profile's. */
+	int32_t transmission;            /* sss_transmission (OFF) */
+	float transmission_strength;     /* 0..1 (1) */
+	float transmission_color[3];     /* 0..1: tint (white); Beer-Lambert:
+	                                    the colour at transmission_distance */
+	float transmission_distance;     /* metres, > 0 (0.01): Beer-Lambert's
+	                                    distance; fast: fade-out thickness */
+	float transmission_translucency; /* 0..1 (0.83): Jimenez */
+	float transmission_distortion;   /* 0..1 (0.2): fast, normal shift */
+	float transmission_power;        /* > 0 (4): fast */
+	float transmission_scale;        /* >= 0 (1): fast */
+	float transmission_ambient;      /* >= 0 (0): fast */
+	float thickness_scale;           /* >= 0 (1): multiplies the pass */
 } sss_material;
 
 /* Sets struct_size, kind and that kind's defaults (d'Eon skin for
@@ -241,6 +306,14 @@ SSS_API sss_result sss_kernel_1d(const sss_material *mat,
                                  double pixels_per_metre, int32_t taps,
                                  float *offsets, float *weights,
                                  int32_t *count);
+
+/* The transmittance factor of a material (what multiplies the back light;
+ * strength and colour included) at a thickness in metres, with N . V =
+ * facing (the fast model's view term; others ignore it), radius_scale 1.
+ * Thickness NaN or negative gives 0; +Inf gives the thick limit. */
+SSS_API sss_result sss_transmittance(const sss_material *mat,
+                                     double thickness_metres, double facing,
+                                     double out[3]);
 
 /* --------------------------------------------------------------- options */
 

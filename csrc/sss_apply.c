@@ -2,6 +2,7 @@
  * kernel per material, prepares the light to scatter, runs the method and
  * recombines the passes as Blender does. */
 #include "sss_internal.h"
+#include "sss_transmission.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -217,6 +218,14 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 			             "%d appears twice in the table", idx);
 		seen[idx / 8] |= (uint8_t)(1u << (idx % 8));
 	}
+	/* Transmission (sss_transmission.c): back-lit light joins the signal
+	 * before the blur; NULL when nothing transmits. */
+	sss__transmission *transmission = NULL;
+	if ((r = sss__transmission_prepare(p, materials, material_count, &opt,
+	                                   cam->unit_scale, w, h, out_combined,
+	                                   out_diffuse_light, &transmission,
+	                                   errbuf, errbuf_len)))
+		return r;
 
 	/* All allocations up front, one error path. */
 	size_t npix = (size_t)w * (size_t)h;
@@ -288,6 +297,8 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 			if (k >= 0 && p->position.data &&
 			    !sss__isfinite3(pixel(&p->position, x, y)))
 				k = -1;
+			if (k >= 0 && transmission) /* back-lit light, before the blur */
+				sss__transmission_add(transmission, k, x, y, s);
 			if (k >= 0 && kernels[k].texturing ==
 			              SSS_TEXTURING_PRE_AND_POST) {
 				const float *col = pixel(&p->diff_col, x, y);
@@ -366,6 +377,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	}
 	r = SSS_OK;
 done:
+	sss__transmission_free(transmission);
 	free(kernels);
 	free(by_index);
 	free(slot);

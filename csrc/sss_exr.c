@@ -1024,12 +1024,14 @@ sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
 		             "is NULL", exr ? "passes" : "exr");
 	memset(passes, 0, sizeof *passes);
 
-	/* The layer: as named, or the first (in file order) with DiffDir. */
+	/* The layer: as named, or the first (in file order) with DiffDir that
+	 * is not the back-light layer (transmission's, SSS_BACKLIGHT_LAYER). */
 	const char *use = NULL;
 	for (int32_t i = 0; i < exr->pass_count && !use; i++) {
 		const xpass *p = &exr->passes[i];
 		if (layer ? strcmp(p->layer, layer) == 0
-		          : strcmp(p->pass, "DiffDir") == 0)
+		          : strcmp(p->pass, "DiffDir") == 0 &&
+		            strcmp(p->layer, SSS_BACKLIGHT_LAYER) != 0)
 			use = p->layer;
 	}
 	if (!use) {

@@ -1,15 +1,16 @@
 /* sss_material.c - material defaults, validation and Burley's radius
  * mapping: everything about one row of the table, before any tabulation. */
 #include "sss_internal.h"
+#include "sss_transmission.h"
 
 #include <stdio.h>
 #include <string.h>
 
 /* d'Eon & Luebke 2007 (GPU Gems 3 ch. 14) six-Gaussian skin: variances in
  * mm^2 and RGB weights; each channel sums to 1. */
-static const float deon_variance[6] = {0.0064f, 0.0484f, 0.187f,
-                                       0.567f, 1.99f, 7.41f};
-static const float deon_weight[6][3] = {
+const float sss__deon_variance[6] = {0.0064f, 0.0484f, 0.187f,
+                                    0.567f, 1.99f, 7.41f};
+const float sss__deon_weight[6][3] = {
 	{0.233f, 0.455f, 0.649f}, {0.100f, 0.336f, 0.344f},
 	{0.118f, 0.198f, 0.000f}, {0.113f, 0.007f, 0.007f},
 	{0.358f, 0.004f, 0.000f}, {0.078f, 0.000f, 0.000f},
@@ -39,8 +40,9 @@ void sss_material_default(sss_material *mat, int32_t kind)
 
 	mat->gaussian_count = 6;
 	for (int i = 0; i < 6; i++) {
-		mat->gaussian_variance[i] = deon_variance[i];
-		memcpy(mat->gaussian_weight[i], deon_weight[i], sizeof(float) * 3);
+		mat->gaussian_variance[i] = sss__deon_variance[i];
+		memcpy(mat->gaussian_weight[i], sss__deon_weight[i],
+		       sizeof(float) * 3);
 	}
 	mat->gaussian_scale = 1.0f;
 
@@ -56,6 +58,18 @@ void sss_material_default(sss_material *mat, int32_t kind)
 	mat->near_far_balance = 0.5f;
 	set3(mat->near_sigma, 0.35f, 0.07f, 0.035f);
 	set3(mat->far_sigma, 1.0f, 0.12f, 0.10f);
+
+	/* Transmission: off; when turned on, the profile's own model. */
+	mat->transmission = SSS_TRANSMISSION_OFF;
+	mat->transmission_strength = 1.0f;
+	set3(mat->transmission_color, 1.0f, 1.0f, 1.0f);
+	mat->transmission_distance = 0.01f;
+	mat->transmission_translucency = 0.83f; /* Jimenez's demo */
+	mat->transmission_distortion = 0.2f;
+	mat->transmission_power = 4.0f;
+	mat->transmission_scale = 1.0f;
+	mat->transmission_ambient = 0.0f;
+	mat->thickness_scale = 1.0f;
 }
 
 #define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
@@ -106,6 +120,9 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 	if (mat->taps < 0 || mat->taps > 4097)
 		return FAIL("material %d: taps %d must be 0 (default) or 1..4097",
 		            idx, mat->taps);
+
+	if ((r = sss__transmission_validate(mat, errbuf, errbuf_len)))
+		return r;
 
 	switch (mat->kind) {
 	case SSS_PROFILE_BURLEY:

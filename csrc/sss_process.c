@@ -54,6 +54,55 @@ static int same_file(const char *a, const char *b)
 	return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
+/* The back-light layer's passes (SSS_BACKLIGHT_LAYER: DiffDir, DiffInd and
+ * the thickness and facing AOVs) into passes; a thickness stored squared
+ * becomes its square root in *thick_buf (allocated). No layer: nothing. */
+static sss_result back_light_passes(const sss_exr *exr, const char *layer,
+                                    sss_passes *passes, float **thick_buf,
+                                    const char *in, char *err, size_t errlen)
+{
+	sss_image v;
+	if (strcmp(layer, SSS_BACKLIGHT_LAYER) == 0 ||
+	    sss_exr_find(exr, SSS_BACKLIGHT_LAYER, "DiffDir", &v) != SSS_OK)
+		return SSS_OK;
+	if (v.channels < 3)
+		return sss__fail(err, errlen, SSS_ERR_MISSING_PASS, "%s: layer '%s'"
+		                 ": pass DiffDir has %d channel(s), needs RGB", in,
+		                 SSS_BACKLIGHT_LAYER, v.channels);
+	passes->back_dir = v;
+	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, "DiffInd", &v) == SSS_OK &&
+	    v.channels >= 3)
+		passes->back_ind = v;
+	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_FACING_PASS, &v) ==
+	    SSS_OK)
+		passes->facing = v;
+	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_PASS, &v) ==
+	    SSS_OK) {
+		passes->thickness = v;
+		return SSS_OK;
+	}
+	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, &v) !=
+	    SSS_OK)
+		return SSS_OK; /* sss_apply names the missing thickness */
+	int64_t stride = v.row_stride ? v.row_stride
+	                 : (int64_t)v.width * v.channels;
+	float *t = malloc((size_t)v.width * (size_t)v.height * sizeof *t);
+	if (!t)
+		return sss__fail(err, errlen, SSS_ERR_OUT_OF_MEMORY, "%s: out of "
+		                 "memory for the thickness pass", in);
+	/* The mean of t^2 over the samples: its root is the thickness; a
+	 * slightly negative value (filter noise) is 0, NaN stays NaN. */
+	for (int32_t y = 0; y < v.height; y++)
+		for (int32_t x = 0; x < v.width; x++) {
+			float sq = v.data[y * stride + (int64_t)x * v.channels];
+			t[(size_t)y * v.width + x] = sq > 0.0f ? sqrtf(sq)
+			                             : sq <= 0.0f ? 0.0f : sq;
+		}
+	*thick_buf = t;
+	passes->thickness = (sss_image){t, v.width, v.height, 1, 0};
+	return SSS_OK;
+}
+
 sss_result sss_process_exr(const char *in, const char *out,
                            const sss_scene *scene,
                            const sss_process_options *user_opt,
@@ -83,7 +132,7 @@ sss_result sss_process_exr(const char *in, const char *out,
 
 	sss_timings t = {0, 0, 0};
 	sss_exr *exr = NULL;
-	float *combined = NULL, *light = NULL;
+	float *combined = NULL, *light = NULL, *thickness = NULL;
 	sss_result r;
 
 	double t0 = now();
@@ -102,6 +151,9 @@ sss_result sss_process_exr(const char *in, const char *out,
 		              "positive value (NaN-filled or empty)", in, layer);
 		goto done;
 	}
+	if ((r = back_light_passes(exr, layer, &passes, &thickness, in, err,
+	                           errlen)))
+		goto done;
 	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
 	size_t n = (size_t)w * (size_t)h;
 	combined = malloc(n * 4 * sizeof *combined);
@@ -147,6 +199,7 @@ done:
 		*timings = t;
 	free(combined);
 	free(light);
+	free(thickness);
 	sss_exr_free(exr);
 	return r;
 }

@@ -313,6 +313,12 @@ static const name_value mappings[] = {
 	{"cycles", SSS_BURLEY_CYCLES}, {"eevee", SSS_BURLEY_EEVEE},
 	{"random-walk", SSS_BURLEY_RANDOM_WALK},
 };
+static const name_value transmissions[] = {
+	{"off", SSS_TRANSMISSION_OFF}, {"burley", SSS_TRANSMISSION_BURLEY},
+	{"jimenez", SSS_TRANSMISSION_JIMENEZ},
+	{"beer-lambert", SSS_TRANSMISSION_BEER_LAMBERT},
+	{"fast", SSS_TRANSMISSION_FAST},
+};
 static const name_value texturings[] = {
 	{"post", SSS_TEXTURING_POST},
 	{"pre-and-post", SSS_TEXTURING_PRE_AND_POST},
@@ -404,6 +410,9 @@ enum {
 	M_GAUSSIANS, M_SCALE,
 	M_WIDTH, M_STRENGTH_RGB, M_FALLOFF,
 	M_SCATTER_SCALE, M_BALANCE, M_NEAR_SIGMA, M_FAR_SIGMA,
+	M_TRANSMISSION, M_T_STRENGTH, M_T_COLOR, M_T_DISTANCE,
+	M_T_TRANSLUCENCY, M_T_DISTORTION, M_T_POWER, M_T_SCALE, M_T_AMBIENT,
+	M_THICKNESS_SCALE,
 	M_COUNT
 };
 static const char *const material_keys[M_COUNT] = {
@@ -412,6 +421,10 @@ static const char *const material_keys[M_COUNT] = {
 	"gaussians", "scale",
 	"width", "strength_rgb", "falloff",
 	"scatter_scale", "balance", "near_sigma", "far_sigma",
+	"transmission", "transmission_strength", "transmission_color",
+	"transmission_distance", "transmission_translucency",
+	"transmission_distortion", "transmission_power", "transmission_scale",
+	"transmission_ambient", "thickness_scale",
 };
 /* The profile a key belongs to; -1 for keys every profile reads. */
 static const int8_t key_profile[M_COUNT] = {
@@ -421,6 +434,7 @@ static const int8_t key_profile[M_COUNT] = {
 	SSS_PROFILE_JIMENEZ, SSS_PROFILE_JIMENEZ, SSS_PROFILE_JIMENEZ,
 	SSS_PROFILE_NEAR_FAR, SSS_PROFILE_NEAR_FAR, SSS_PROFILE_NEAR_FAR,
 	SSS_PROFILE_NEAR_FAR,
+	-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, /* transmission: every kind */
 };
 
 static const char *const gaussian_keys[2] = {"variance", "weight"};
@@ -551,6 +565,15 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 		{M_BALANCE, &m->near_far_balance, UNIT, 0},
 		{M_NEAR_SIGMA, m->near_sigma, POSITIVE_F, 1},
 		{M_FAR_SIGMA, m->far_sigma, POSITIVE_F, 1},
+		{M_T_STRENGTH, &m->transmission_strength, UNIT, 0},
+		{M_T_COLOR, m->transmission_color, UNIT, 1},
+		{M_T_DISTANCE, &m->transmission_distance, POSITIVE_F, 0},
+		{M_T_TRANSLUCENCY, &m->transmission_translucency, UNIT, 0},
+		{M_T_DISTORTION, &m->transmission_distortion, UNIT, 0},
+		{M_T_POWER, &m->transmission_power, POSITIVE_F, 0},
+		{M_T_SCALE, &m->transmission_scale, NONNEG_F, 0},
+		{M_T_AMBIENT, &m->transmission_ambient, NONNEG_F, 0},
+		{M_THICKNESS_SCALE, &m->thickness_scale, NONNEG_F, 0},
 	};
 	for (int k = 0; k < COUNT(nums); k++) {
 		const cJSON *it = f[nums[k].key];
@@ -574,6 +597,12 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	if (f[M_MAPPING] &&
 	    (r = get_enum(c, f[M_MAPPING], p, "mapping", mappings,
 	                  COUNT(mappings), &m->burley_mapping)))
+		return r;
+	join(p, mp, "transmission");
+	if (f[M_TRANSMISSION] &&
+	    (r = get_enum(c, f[M_TRANSMISSION], p, "transmission model",
+	                  transmissions, COUNT(transmissions),
+	                  &m->transmission)))
 		return r;
 	join(p, mp, "gaussians");
 	if (f[M_GAUSSIANS] && (r = parse_gaussians(c, f[M_GAUSSIANS], p, m)))

@@ -1,0 +1,406 @@
+/* sss_transmission.c - back-lit transmission: light that reaches the back
+ * of a thin part and crosses it, added to the diffuse light before the
+ * blur (so it is softened like the rest).
+ *
+ * Inputs per pixel: B, the light arriving from behind (the DiffDir and
+ * DiffInd of a view layer whose material override is a white Translucent
+ * BSDF: Cycles shades the visible point with the light that reaches it
+ * through the object, shadows included), and t, the object's local
+ * thickness there. The added light is strength x T(t) x B with T <= 1; the
+ * diffuse colour (the albedo A) multiplies it after the blur like all
+ * diffuse light, so T(0) = 1 here is A in the final image: the
+ * albedo-consistent maximum of the models below.
+ *
+ * Models (sss_transmission in sss.h):
+ *  - burley: the profile's own transmittance, its mass beyond a plane at
+ *    distance t, T(t) = integral_t^inf 2 pi r R(r) dr (Golubev 2018, UE4,
+ *    HDRP ComputeTransmittanceDisney). Burley: e^{-t/d}/4 + 3 e^{-t/3d}/4;
+ *    a sum of 2-D Gaussians sum w_i G(v_i): sum w_i e^{-t^2 / 2 v_i}. The
+ *    d and v_i are exactly those the blur uses, so the glow matches the
+ *    blur's reach.
+ *  - jimenez: Jimenez et al. 2010 (SeparableSSS.h SSSSTransmittance):
+ *    d'Eon's skin sum w_i e^{-s^2 / v_i} with s = t 8.25 (1 - translucency)
+ *    / sssWidth (sssWidth = the material's jimenez_width).
+ *  - beer-lambert: colour^(t / distance), the artist-friendly form of
+ *    e^{-c t} (seed 001, SetTransmittanceCoefficientByDistance).
+ *  - fast: Barre-Brisebois & Bouchard, GDC 2011:
+ *    (saturate(V . -(L + N delta))^p scale + ambient) x thinness. Cycles
+ *    gives no per-pixel light direction (many lights, area lights,
+ *    the world), but B already holds the light's intensity, distance and
+ *    shadowing (their fLightAttenuation); the light that crossed the part
+ *    leaves it along its normal, so L = -N and V . -(L + N delta) =
+ *    (1 - delta) N . V (the facing pass; 1 when absent). Thinness is
+ *    max(0, 1 - t / distance) in place of their baked local-thickness
+ *    map. Capped at 1 so that no more light leaves than arrived.
+ */
+#include "sss_internal.h"
+#include "sss_transmission.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
+                            __VA_ARGS__)
+
+/* One material, in scene units. */
+typedef struct tmat {
+	int32_t model;          /* sss_transmission; OFF = nothing */
+	double gain[3];         /* strength x colour (Beer-Lambert: strength) */
+	double thickness_scale;
+	/* burley: per channel, Burley d (> 0) or a Gaussian sum */
+	int n[3];
+	double d[3];
+	double var[3][SSS_MAX_GAUSSIANS], w[3][SSS_MAX_GAUSSIANS];
+	/* jimenez: s (mm of d'Eon's profile) per scene unit of thickness */
+	double s_per_unit;
+	/* beer-lambert and fast: scene units; colour for Beer-Lambert */
+	double distance;
+	double colour[3];
+	/* fast */
+	double distortion, power, scale, ambient;
+} tmat;
+
+struct sss__transmission {
+	sss_image back_dir, back_ind, thickness, facing;
+	tmat *mats; /* material_count entries */
+};
+
+/* ------------------------------------------------------------ validation */
+
+static int in_range(float v, float lo, float hi)
+{
+	return isfinite(v) && v >= lo && v <= hi;
+}
+
+sss_result sss__transmission_validate(const sss_material *mat, char *errbuf,
+                                      size_t errbuf_len)
+{
+	int32_t idx = mat->pass_index;
+	if (mat->transmission < SSS_TRANSMISSION_OFF ||
+	    mat->transmission > SSS_TRANSMISSION_FAST)
+		return FAIL("material %d: unknown transmission model %d", idx,
+		            mat->transmission);
+	if (mat->transmission == SSS_TRANSMISSION_OFF)
+		return SSS_OK;
+	static const char rgb[3] = {'r', 'g', 'b'};
+	if (!in_range(mat->transmission_strength, 0.0f, 1.0f))
+		return FAIL("material %d: transmission_strength %g must be in "
+		            "[0, 1]", idx, (double)mat->transmission_strength);
+	for (int c = 0; c < 3; c++)
+		if (!in_range(mat->transmission_color[c], 0.0f, 1.0f))
+			return FAIL("material %d: transmission_color.%c = %g must be "
+			            "in [0, 1]", idx, rgb[c],
+			            (double)mat->transmission_color[c]);
+	if (!in_range(mat->transmission_distance, 0.0f, 1e30f) ||
+	    !(mat->transmission_distance > 0.0f))
+		return FAIL("material %d: transmission_distance %g must be > 0 "
+		            "(metres)", idx, (double)mat->transmission_distance);
+	if (!in_range(mat->transmission_translucency, 0.0f, 1.0f))
+		return FAIL("material %d: transmission_translucency %g must be in "
+		            "[0, 1]", idx, (double)mat->transmission_translucency);
+	if (!in_range(mat->transmission_distortion, 0.0f, 1.0f))
+		return FAIL("material %d: transmission_distortion %g must be in "
+		            "[0, 1]", idx, (double)mat->transmission_distortion);
+	if (!in_range(mat->transmission_power, 0.0f, 1e30f) ||
+	    !(mat->transmission_power > 0.0f))
+		return FAIL("material %d: transmission_power %g must be > 0", idx,
+		            (double)mat->transmission_power);
+	if (!in_range(mat->transmission_scale, 0.0f, 1e30f))
+		return FAIL("material %d: transmission_scale %g must be >= 0", idx,
+		            (double)mat->transmission_scale);
+	if (!in_range(mat->transmission_ambient, 0.0f, 1e30f))
+		return FAIL("material %d: transmission_ambient %g must be >= 0",
+		            idx, (double)mat->transmission_ambient);
+	if (!in_range(mat->thickness_scale, 0.0f, 1e30f))
+		return FAIL("material %d: thickness_scale %g must be >= 0", idx,
+		            (double)mat->thickness_scale);
+	return SSS_OK;
+}
+
+/* ----------------------------------------------------------------- models */
+
+/* len: scene units per metre of profile length (radius_scale/unit_scale). */
+static void tmat_make(const sss_material *mat, const sss_options *opt,
+                      double unit_scale, tmat *m)
+{
+	memset(m, 0, sizeof *m);
+	m->model = mat->kind == SSS_PROFILE_NONE ? SSS_TRANSMISSION_OFF
+	                                         : mat->transmission;
+	if (m->model == SSS_TRANSMISSION_OFF)
+		return;
+	double len = (double)opt->radius_scale / unit_scale;
+	for (int c = 0; c < 3; c++) {
+		m->gain[c] = mat->transmission_strength;
+		if (m->model != SSS_TRANSMISSION_BEER_LAMBERT)
+			m->gain[c] *= mat->transmission_color[c];
+		m->colour[c] = mat->transmission_color[c];
+	}
+	m->thickness_scale = mat->thickness_scale;
+	m->distance = (double)mat->transmission_distance * len;
+	m->distortion = mat->transmission_distortion;
+	m->power = mat->transmission_power;
+	m->scale = mat->transmission_scale;
+	m->ambient = mat->transmission_ambient;
+	switch (m->model) {
+	case SSS_TRANSMISSION_BURLEY:
+		for (int c = 0; c < 3; c++)
+			m->n[c] = sss__profile_gaussians(mat, opt, unit_scale, c,
+			                                 m->var[c], m->w[c], &m->d[c]);
+		break;
+	case SSS_TRANSMISSION_JIMENEZ: {
+		/* s = t 8.25 (1 - translucency) / sssWidth, both lengths in the
+		 * same unit; s is then in mm of d'Eon's profile. */
+		double width = (double)mat->jimenez_width * len;
+		double k = 8.25 * (1.0 - (double)mat->transmission_translucency);
+		m->s_per_unit = k == 0.0 ? 0.0 : width > 0.0 ? k / width
+		                                              : INFINITY;
+		break;
+	}
+	default:
+		break;
+	}
+}
+
+/* exp(-a * t) for a, t >= 0 with 0 * inf read as 0 (no attenuation). */
+static double decay(double a, double t)
+{
+	if (a == 0.0 || t == 0.0)
+		return 1.0;
+	return exp(-a * t);
+}
+
+/* T per channel at thickness t >= 0 (scene units, +Inf allowed). */
+static void tmat_eval(const tmat *m, double t, double facing, double out[3])
+{
+	for (int c = 0; c < 3; c++) {
+		double T = 0.0;
+		switch (m->model) {
+		case SSS_TRANSMISSION_BURLEY:
+			if (m->n[c] == 0) {
+				double d = m->d[c];
+				if (d > 0.0)
+					T = 0.25 * exp(-t / d) + 0.75 * exp(-t / (3.0 * d));
+				else
+					T = t == 0.0 ? 1.0 : 0.0;
+			} else {
+				for (int i = 0; i < m->n[c]; i++)
+					T += m->w[c][i] * (m->var[c][i] > 0.0
+					     ? decay(1.0 / (2.0 * m->var[c][i]), t * t)
+					     : (t == 0.0 ? 1.0 : 0.0));
+			}
+			break;
+		case SSS_TRANSMISSION_JIMENEZ: {
+			double s = m->s_per_unit == 0.0 || t == 0.0
+			           ? 0.0 : m->s_per_unit * t;
+			double sum = 0.0; /* the weights' sum, 1 up to rounding */
+			for (int i = 0; i < 6; i++) {
+				double wi = (double)sss__deon_weight[i][c];
+				sum += wi;
+				T += wi * decay(1.0 / (double)sss__deon_variance[i], s * s);
+			}
+			T /= sum;
+			break;
+		}
+		case SSS_TRANSMISSION_BEER_LAMBERT: {
+			double col = m->colour[c];
+			if (t == 0.0 || col >= 1.0)
+				T = 1.0;
+			else if (col <= 0.0 || !(m->distance > 0.0))
+				T = 0.0;
+			else
+				T = decay(-log(col) / m->distance, t);
+			break;
+		}
+		case SSS_TRANSMISSION_FAST: {
+			double thin = m->distance > 0.0 ? 1.0 - t / m->distance
+			                                : (t == 0.0 ? 1.0 : 0.0);
+			if (!(thin > 0.0))
+				break;
+			double f = isfinite(facing) ? facing : 1.0;
+			f = (1.0 - m->distortion) * f;
+			f = f < 0.0 ? 0.0 : f > 1.0 ? 1.0 : f;
+			double v = (pow(f, m->power) * m->scale + m->ambient) * thin;
+			T = v < 1.0 ? v : 1.0;
+			break;
+		}
+		default:
+			break;
+		}
+		/* Rounding must not let more light out than came in. */
+		out[c] = m->gain[c] * (T < 1.0 ? T : 1.0);
+	}
+}
+
+sss_result sss_transmittance(const sss_material *mat, double thickness,
+                             double facing, double out[3])
+{
+	if (!mat || !out)
+		return SSS_ERR_INVALID_ARGUMENT;
+	sss_material v = *mat;
+	v.pass_index = 1; /* the table key plays no part */
+	sss_result r = sss_material_validate(&v, NULL, 0);
+	if (r)
+		return r;
+	out[0] = out[1] = out[2] = 0.0;
+	if (!(thickness >= 0.0))
+		return SSS_OK; /* NaN or negative: unknown, nothing crosses */
+	sss_options opt;
+	sss_options_default(&opt);
+	tmat m;
+	tmat_make(&v, &opt, 1.0, &m);
+	double t = m.thickness_scale == 0.0 ? 0.0 : thickness * m.thickness_scale;
+	tmat_eval(&m, t, facing, out);
+	return SSS_OK;
+}
+
+/* ---------------------------------------------------------------- passes */
+
+static int64_t stride_of(const sss_image *im)
+{
+	return im->row_stride ? im->row_stride
+	                      : (int64_t)im->width * im->channels;
+}
+
+static const float *pixel(const sss_image *im, int32_t x, int32_t y)
+{
+	return im->data + y * stride_of(im) + (int64_t)x * im->channels;
+}
+
+static sss_result check_pass(const char *name, const sss_image *im,
+                             int32_t channels, int32_t w, int32_t h,
+                             const sss_image *outs[2], char *errbuf,
+                             size_t errbuf_len)
+{
+	if (!im->data)
+		return SSS_OK;
+	if (im->width <= 0 || im->height <= 0)
+		return FAIL("pass %s: image size %dx%d must be at least 1x1", name,
+		            im->width, im->height);
+	if (im->channels < channels)
+		return FAIL("pass %s has %d channel(s), needs %d", name,
+		            im->channels, channels);
+	if (im->row_stride != 0 &&
+	    im->row_stride < (int64_t)im->width * im->channels)
+		return FAIL("pass %s: row_stride %lld is smaller than width x "
+		            "channels", name, (long long)im->row_stride);
+	if (im->width != w || im->height != h)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_SIZE_MISMATCH,
+		                 "pass %s is %dx%d but DiffDir is %dx%d", name,
+		                 im->width, im->height, w, h);
+	const char *lo = (const char *)im->data;
+	const char *hi = (const char *)(im->data + (im->height - 1) *
+	                 stride_of(im) + (int64_t)im->width * im->channels);
+	for (int i = 0; i < 2; i++) {
+		const sss_image *o = outs[i];
+		if (!o || !o->data || o->width <= 0 || o->height <= 0)
+			continue;
+		const char *olo = (const char *)o->data;
+		const char *ohi = (const char *)(o->data + (o->height - 1) *
+		                  stride_of(o) + (int64_t)o->width * o->channels);
+		if (olo < hi && lo < ohi)
+			return FAIL("an output overlaps pass %s; inputs are never "
+			            "overwritten", name);
+	}
+	return SSS_OK;
+}
+
+sss_result sss__transmission_prepare(const sss_passes *p,
+                                     const sss_material *materials,
+                                     int32_t count, const sss_options *opt,
+                                     double unit_scale, int32_t w, int32_t h,
+                                     const sss_image *out_a,
+                                     const sss_image *out_b,
+                                     sss__transmission **out, char *errbuf,
+                                     size_t errbuf_len)
+{
+	*out = NULL;
+	const sss_image *outs[2] = {out_a, out_b};
+	const struct {
+		const char *name;
+		const sss_image *im;
+		int32_t channels;
+	} passes[] = {
+		{"BackDir", &p->back_dir, 3}, {"BackInd", &p->back_ind, 3},
+		{"Thickness", &p->thickness, 1}, {"Facing", &p->facing, 1},
+	};
+	sss_result r;
+	for (size_t i = 0; i < sizeof passes / sizeof *passes; i++)
+		if ((r = check_pass(passes[i].name, passes[i].im,
+		                    passes[i].channels, w, h, outs, errbuf,
+		                    errbuf_len)))
+			return r;
+	int32_t first = -1;
+	for (int32_t m = 0; m < count && first < 0; m++)
+		if (materials[m].transmission != SSS_TRANSMISSION_OFF &&
+		    materials[m].kind != SSS_PROFILE_NONE)
+			first = m;
+	if (first < 0)
+		return SSS_OK;
+	if (!p->back_dir.data) {
+		if (p->back_ind.data || p->thickness.data)
+			return sss__fail(errbuf, errbuf_len, SSS_ERR_MISSING_PASS,
+			                 "pass BackDir is required with BackInd or "
+			                 "Thickness");
+		return SSS_OK; /* no back light: nothing to transmit */
+	}
+	if (!p->thickness.data)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_MISSING_PASS,
+		                 "pass Thickness is required with BackDir: material "
+		                 "%d transmits", materials[first].pass_index);
+
+	sss__transmission *t = calloc(1, sizeof *t);
+	tmat *mats = t ? calloc((size_t)count, sizeof *mats) : NULL;
+	if (!mats) {
+		free(t);
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_OUT_OF_MEMORY,
+		                 "cannot allocate the transmission table");
+	}
+	t->mats = mats;
+	t->back_dir = p->back_dir;
+	t->back_ind = p->back_ind;
+	t->thickness = p->thickness;
+	t->facing = p->facing;
+	for (int32_t m = 0; m < count; m++)
+		tmat_make(&materials[m], opt, unit_scale, &mats[m]);
+	*out = t;
+	return SSS_OK;
+}
+
+void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
+                           int32_t y, float light[3])
+{
+	const tmat *mt = &t->mats[m];
+	if (mt->model == SSS_TRANSMISSION_OFF)
+		return;
+	double thick = pixel(&t->thickness, x, y)[0];
+	if (!(thick >= 0.0))
+		return; /* NaN or negative: no measurement here */
+	const float *bd = pixel(&t->back_dir, x, y);
+	const float *bi = t->back_ind.data ? pixel(&t->back_ind, x, y) : NULL;
+	double b[3];
+	for (int c = 0; c < 3; c++) {
+		b[c] = (double)bd[c] + (bi ? (double)bi[c] : 0.0);
+		if (!isfinite(b[c]))
+			return; /* never spread a NaN or Inf */
+		if (b[c] < 0.0)
+			b[c] = 0.0; /* no negative light crosses */
+	}
+	double facing = t->facing.data ? pixel(&t->facing, x, y)[0] : 1.0;
+	double tt = mt->thickness_scale == 0.0 ? 0.0
+	            : thick * mt->thickness_scale;
+	double T[3];
+	tmat_eval(mt, tt, facing, T);
+	for (int c = 0; c < 3; c++) {
+		double v = (double)light[c] + T[c] * b[c];
+		if (isfinite(v) && fabs(v) <= 3.0e38)
+			light[c] = (float)v;
+	}
+}
+
+void sss__transmission_free(sss__transmission *t)
+{
+	if (!t)
+		return;
+	free(t->mats);
+	free(t);
+}

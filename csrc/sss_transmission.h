@@ -1,0 +1,42 @@
+/* sss_transmission.h - private interface of sss_transmission.c: back-lit
+ * transmission added to the diffuse light before the blur. */
+#ifndef SSS_TRANSMISSION_H
+#define SSS_TRANSMISSION_H
+
+#include "sss.h"
+
+/* d'Eon & Luebke 2007 six-Gaussian skin (sss_material.c): variances in
+ * mm^2 and RGB weights, each channel summing to 1. */
+extern const float sss__deon_variance[6];
+extern const float sss__deon_weight[6][3];
+
+/* Checks a material's transmission fields (called by
+ * sss_material_validate); errors name the field. */
+sss_result sss__transmission_validate(const sss_material *mat,
+                                      char *errbuf, size_t errbuf_len);
+
+typedef struct sss__transmission sss__transmission;
+
+/* Checks the back-light passes against the image size and the outputs,
+ * and prepares every transmitting material in scene units. *out is NULL
+ * (and nothing is transmitted) when there is no back light or no material
+ * transmits. materials must already be valid. */
+sss_result sss__transmission_prepare(const sss_passes *p,
+                                     const sss_material *materials,
+                                     int32_t material_count,
+                                     const sss_options *opt,
+                                     double unit_scale, int32_t width,
+                                     int32_t height,
+                                     const sss_image *out_a,
+                                     const sss_image *out_b,
+                                     sss__transmission **out,
+                                     char *errbuf, size_t errbuf_len);
+
+/* Adds material m's transmitted light at pixel (x, y) to light[3]. A
+ * non-finite back light or a NaN or negative thickness adds nothing. */
+void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
+                           int32_t y, float light[3]);
+
+void sss__transmission_free(sss__transmission *t); /* NULL is fine */
+
+#endif /* SSS_TRANSMISSION_H */

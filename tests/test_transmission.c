@@ -1,0 +1,600 @@
+/* test_transmission.c - back-lit transmission: a thin slab lit from behind
+ * through sss_apply, every model's transmittance, the extremes of the
+ * thickness pass, energy, validation, the scene JSON and the back-light
+ * layer of an EXR through sss_process_exr. */
+#include "test_util.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define W 32
+#define H 16
+
+/* A fronto-parallel slab filling the image, 1 m from the camera, dark in
+ * front (DiffDir 0), lit from behind with back light B, thickness t. */
+typedef struct slab {
+	float dd[W * H * 3], col[W * H * 3], depth[W * H], index[W * H];
+	float back[W * H * 3], thick[W * H], facing[W * H];
+	float out[W * H * 3];
+	sss_passes p;
+} slab;
+
+static void slab_make(slab *s, float b, float t)
+{
+	memset(s, 0, sizeof *s);
+	for (int i = 0; i < W * H; i++) {
+		for (int c = 0; c < 3; c++) {
+			s->col[3 * i + c] = 0.8f;
+			s->back[3 * i + c] = b;
+		}
+		s->depth[i] = 1.0f;
+		s->index[i] = 1.0f;
+		s->thick[i] = t;
+		s->facing[i] = 1.0f;
+	}
+	s->p.diff_dir = (sss_image){s->dd, W, H, 3, 0};
+	s->p.diff_col = (sss_image){s->col, W, H, 3, 0};
+	s->p.depth = (sss_image){s->depth, W, H, 1, 0};
+	s->p.index_ma = (sss_image){s->index, W, H, 1, 0};
+	s->p.back_dir = (sss_image){s->back, W, H, 3, 0};
+	s->p.thickness = (sss_image){s->thick, W, H, 1, 0};
+}
+
+static sss_material skin(int32_t model, float radius)
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.radius[0] = radius;
+	m.radius[1] = radius * 0.5f;
+	m.radius[2] = radius * 0.25f;
+	m.transmission = model;
+	return m;
+}
+
+static sss_result run(slab *s, const sss_material *m, float radius_scale,
+                      char *err, size_t errlen)
+{
+	sss_camera cam;
+	sss_camera_default(&cam);
+	sss_options opt;
+	sss_options_default(&opt);
+	opt.radius_scale = radius_scale;
+	opt.num_threads = 1;
+	sss_image out = {s->out, W, H, 3, 0};
+	return sss_apply(&s->p, &cam, m, 1, &opt, NULL, &out, err, errlen);
+}
+
+/* The front's light at the centre of the slab, channel c. */
+static float front(slab *s, int c)
+{
+	return s->out[3 * ((H / 2) * W + W / 2) + c];
+}
+
+static int all_finite(const float *v, int n)
+{
+	for (int i = 0; i < n; i++)
+		if (!isfinite(v[i]))
+			return 0;
+	return 1;
+}
+
+static slab S; /* big: static, not on the stack */
+
+static void test_slab(void)
+{
+	char err[256];
+	const float b = 2.0f;
+	/* Off: the front stays dark, and so it does with no back light. */
+	slab_make(&S, b, 0.001f);
+	sss_material m = skin(SSS_TRANSMISSION_OFF, 0.01f);
+	CHECK_STATUS("slab.off", SSS_OK, run(&S, &m, 1, err, sizeof err));
+	CHECK("slab.off.dark", front(&S, 0) == 0.0f && front(&S, 2) == 0.0f,
+	      "%g", (double)front(&S, 0));
+	m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	S.p.back_dir.data = NULL;
+	S.p.thickness.data = NULL;
+	CHECK_STATUS("slab.nolight", SSS_OK, run(&S, &m, 1, err, sizeof err));
+	CHECK("slab.nolight.dark", front(&S, 0) == 0.0f, "%g",
+	      (double)front(&S, 0));
+
+	/* On: the front brightens as the slab thins, and as the radius
+	 * grows; it matches T(t) B (uniform light stays uniform). */
+	static const int32_t models[] = {
+		SSS_TRANSMISSION_BURLEY, SSS_TRANSMISSION_JIMENEZ,
+		SSS_TRANSMISSION_BEER_LAMBERT, SSS_TRANSMISSION_FAST};
+	static const char *names[] = {"burley", "jimenez", "beer", "fast"};
+	for (int k = 0; k < 4; k++) {
+		float prev = -1.0f;
+		int mono = 1, match = 1;
+		char id[64];
+		for (int i = 12; i >= 0; i--) {
+			float t = i == 0 ? 0.0f : 0.0005f * (float)(1 << (i - 1)) / 8;
+			slab_make(&S, b, t);
+			m = skin(models[k], 0.01f);
+			m.transmission_distance = 0.005f;
+			m.transmission_color[0] = 0.9f;
+			m.transmission_color[1] = 0.5f;
+			m.transmission_color[2] = 0.3f;
+			if (run(&S, &m, 1, err, sizeof err) != SSS_OK) {
+				mono = 0;
+				break;
+			}
+			double T[3];
+			sss_transmittance(&m, t, 1.0, T);
+			if (fabs(front(&S, 0) - T[0] * b) > 1e-4 * b + 1e-6)
+				match = 0;
+			if (front(&S, 0) < prev - 1e-7f)
+				mono = 0;
+			prev = front(&S, 0);
+		}
+		snprintf(id, sizeof id, "slab.%s.thinner-brighter", names[k]);
+		CHECK(id, mono, "not monotonic (%s)", err);
+		snprintf(id, sizeof id, "slab.%s.equals-T-B", names[k]);
+		CHECK(id, match, "front light is not T(t) x B");
+		snprintf(id, sizeof id, "slab.%s.lit", names[k]);
+		CHECK(id, prev > 0.1f * b, "T(0) B = %g", (double)prev);
+	}
+	/* Radius grows: brighter, for the profile-based models. */
+	for (int k = 0; k < 2; k++) {
+		float prev = -1.0f;
+		int mono = 1;
+		for (int i = 0; i < 10; i++) {
+			slab_make(&S, b, 0.004f);
+			m = skin(models[k], 0.002f * (float)(i + 1));
+			m.jimenez_width = 0.002f * (float)(i + 1);
+			run(&S, &m, 1, err, sizeof err);
+			if (front(&S, 0) < prev - 1e-7f)
+				mono = 0;
+			prev = front(&S, 0);
+		}
+		CHECK(k ? "slab.jimenez.wider-brighter" : "slab.burley.wider-"
+		      "brighter", mono && prev > 0.0f, "last %g", (double)prev);
+	}
+	/* The transmitted light is blurred like the rest: a sharp patch of
+	 * back light spreads, and its total is kept (up to the borders). */
+	slab_make(&S, 0.0f, 0.0f);
+	for (int y = 6; y < 10; y++)
+		for (int x = 14; x < 18; x++)
+			for (int c = 0; c < 3; c++)
+				S.back[3 * (y * W + x) + c] = 1.0f;
+	m = skin(SSS_TRANSMISSION_BURLEY, 1.0f); /* d = 3.5 px */
+	run(&S, &m, 1, err, sizeof err);
+	double total = 0.0, outside = 0.0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			float v = S.out[3 * (y * W + x)];
+			total += v;
+			if (x < 13 || x > 18 || y < 5 || y > 10)
+				outside += v;
+		}
+	CHECK("slab.blurred", outside > 0.05 * total, "outside %g of %g",
+	      outside, total);
+	/* ... exactly as the same light arriving in front would be. */
+	static float lit[W * H * 3];
+	memcpy(lit, S.out, sizeof lit);
+	memcpy(S.dd, S.back, sizeof S.dd);
+	m.transmission = SSS_TRANSMISSION_OFF;
+	run(&S, &m, 1, err, sizeof err);
+	float worst = 0.0f;
+	for (int i = 0; i < W * H * 3; i++)
+		worst = fmaxf(worst, fabsf(lit[i] - S.out[i]));
+	CHECK("slab.blurred-like-front-light", worst < 1e-6f, "max diff %g",
+	      (double)worst);
+}
+
+static void test_models(void)
+{
+	double T[3], T2[3];
+	/* Burley: the closed form with the blur's own d; T(0) = 1 (times
+	 * strength and colour): the albedo-consistent maximum once DiffCol
+	 * multiplies it. */
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	double d[3];
+	sss_burley_d(&m, d);
+	for (int i = 0; i < 6; i++) {
+		double t = 0.001 * i;
+		sss_transmittance(&m, t, 1.0, T);
+		double want = 0.25 * exp(-t / d[0]) + 0.75 * exp(-t / (3 * d[0]));
+		CHECK("model.burley.closed-form", fabs(T[0] - want) < 1e-12,
+		      "t %g: %g vs %g", t, T[0], want);
+	}
+	sss_transmittance(&m, 0.0, 1.0, T);
+	CHECK("model.burley.T0", T[0] == 1.0 && T[1] == 1.0 && T[2] == 1.0,
+	      "%g %g %g", T[0], T[1], T[2]);
+	m.transmission_strength = 0.5f;
+	m.transmission_color[1] = 0.4f;
+	sss_transmittance(&m, 0.0, 1.0, T);
+	CHECK("model.burley.T0-tinted", T[0] == 0.5 && fabs(T[1] - 0.2) < 1e-7,
+	      "%g %g", T[0], T[1]);
+	m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	sss_transmittance(&m, 100 * d[0] * 4 * 3.14159, 1.0, T);
+	CHECK("model.burley.thick", T[0] < 1e-6 && T[2] < 1e-6, "%g", T[0]);
+	/* The Gaussian analogue on d'Eon's skin: sum w e^{-t^2 / 2v}. */
+	sss_material_default(&m, SSS_PROFILE_GAUSSIANS);
+	m.transmission = SSS_TRANSMISSION_BURLEY;
+	double t = 0.0005, want = 0.0;
+	for (int i = 0; i < 6; i++)
+		want += m.gaussian_weight[i][0] *
+		        exp(-t * t / (2e-6 * m.gaussian_variance[i]));
+	sss_transmittance(&m, t, 1.0, T);
+	CHECK("model.gaussians", fabs(T[0] - want) < 1e-6, "%g vs %g", T[0],
+	      want);
+	sss_transmittance(&m, 0.0, 1.0, T);
+	CHECK("model.gaussians.T0", fabs(T[0] - 1) < 1e-6 &&
+	      fabs(T[2] - 1) < 1e-6, "%g %g", T[0], T[2]);
+	/* Jimenez: s = t 8.25 (1 - 0.83) / 0.012 = 116.875 t; his T(s). */
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.transmission = SSS_TRANSMISSION_JIMENEZ;
+	t = 0.004;
+	double s = t * 8.25 * (1 - 0.83) / 0.012;
+	static const double jw[6] = {0.233, 0.100, 0.118, 0.113, 0.358, 0.078};
+	static const double jv[6] = {0.0064, 0.0484, 0.187, 0.567, 1.99, 7.41};
+	want = 0.0;
+	for (int i = 0; i < 6; i++)
+		want += jw[i] * exp(-s * s / jv[i]);
+	sss_transmittance(&m, t, 1.0, T);
+	CHECK("model.jimenez", fabs(T[0] - want) < 1e-5, "%g vs %g", T[0],
+	      want);
+	m.transmission_translucency = 1.0f;
+	sss_transmittance(&m, 1.0, 1.0, T);
+	CHECK("model.jimenez.translucent", fabs(T[0] - 1) < 1e-6, "%g", T[0]);
+	/* Beer-Lambert: the colour at the distance, 1 at 0, 0 far away. */
+	m.transmission = SSS_TRANSMISSION_BEER_LAMBERT;
+	m.transmission_distance = 0.002f;
+	m.transmission_color[0] = 0.94f;
+	m.transmission_color[1] = 0.14f;
+	m.transmission_color[2] = 0.0f;
+	sss_transmittance(&m, 0.002, 1.0, T);
+	CHECK("model.beer.at-distance", fabs(T[0] - 0.94) < 1e-6 &&
+	      fabs(T[1] - 0.14) < 1e-6 && T[2] == 0.0, "%g %g %g", T[0], T[1],
+	      T[2]);
+	sss_transmittance(&m, 0.0, 1.0, T);
+	CHECK("model.beer.T0", T[0] == 1 && T[1] == 1 && T[2] == 1, "%g", T[2]);
+	sss_transmittance(&m, 0.004, 1.0, T);
+	CHECK("model.beer.squared", fabs(T[0] - 0.94 * 0.94) < 1e-6, "%g",
+	      T[0]);
+	/* Fast: view term, fade-out, cap at 1. */
+	m.transmission = SSS_TRANSMISSION_FAST;
+	m.transmission_distance = 0.01f;
+	m.transmission_color[0] = m.transmission_color[1] = 1.0f;
+	m.transmission_color[2] = 1.0f;
+	sss_transmittance(&m, 0.005, 1.0, T);
+	want = pow(0.8, 4.0) * 0.5;
+	CHECK("model.fast", fabs(T[0] - want) < 1e-6, "%g vs %g", T[0], want);
+	sss_transmittance(&m, 0.005, 0.5, T2);
+	CHECK("model.fast.grazing-dimmer", T2[0] < T[0], "%g", T2[0]);
+	sss_transmittance(&m, 0.02, 1.0, T);
+	CHECK("model.fast.thick", T[0] == 0.0, "%g", T[0]);
+	m.transmission_scale = 50.0f;
+	m.transmission_ambient = 3.0f;
+	sss_transmittance(&m, 0.0, 1.0, T);
+	CHECK("model.fast.capped", T[0] == 1.0, "%g", T[0]);
+	/* Off, and a profile that does not scatter: nothing. */
+	m = skin(SSS_TRANSMISSION_OFF, 0.01f);
+	sss_transmittance(&m, 0.0, 1.0, T);
+	CHECK("model.off", T[0] == 0 && T[1] == 0 && T[2] == 0, "%g", T[0]);
+}
+
+/* Extremes: every model, thickness 0, negative, NaN, tiny, huge, Inf;
+ * never NaN, never more than the back light (T in [0, 1]). */
+static void test_extremes(void)
+{
+	static const double ts[] = {0.0, -0.0, -1.0, NAN, 1e-30, 1e-6, 1.0,
+	                            1e30, INFINITY, -INFINITY};
+	static const double fs[] = {1.0, 0.0, -1.0, NAN, 2.0};
+	static const int32_t kinds[] = {SSS_PROFILE_BURLEY,
+	                                SSS_PROFILE_GAUSSIANS,
+	                                SSS_PROFILE_JIMENEZ,
+	                                SSS_PROFILE_NEAR_FAR};
+	int bad = 0;
+	for (int k = 0; k < 4; k++)
+		for (int model = 1; model <= 4; model++)
+			for (size_t i = 0; i < sizeof ts / sizeof *ts; i++)
+				for (size_t j = 0; j < sizeof fs / sizeof *fs; j++) {
+					sss_material m;
+					sss_material_default(&m, kinds[k]);
+					m.transmission = model;
+					m.transmission_scale = 1e6f;
+					m.transmission_ambient = 1e6f;
+					double T[3];
+					if (sss_transmittance(&m, ts[i], fs[j], T) != SSS_OK)
+						bad++;
+					for (int c = 0; c < 3; c++)
+						if (!(T[c] >= 0.0 && T[c] <= 1.0)) {
+							if (bad++ < 5)
+								printf("T %g for kind %d model %d t %g f "
+								       "%g\n", T[c], kinds[k], model,
+								       ts[i], fs[j]);
+						}
+					if (!(ts[i] >= 0.0) && (T[0] || T[1] || T[2]))
+						bad++;
+				}
+	CHECK("extremes.transmittance", bad == 0, "%d bad", bad);
+
+	/* Through sss_apply: per-pixel extremes in the thickness and the back
+	 * light; nothing non-finite appears, NaN light is never spread. */
+	char err[256];
+	static const float pix_t[] = {0.0f, -0.0f, -1.0f, NAN, 1e30f,
+	                              INFINITY, 1e-30f, 0.001f};
+	static const float pix_b[] = {1.0f, 0.0f, -5.0f, 1e30f, 65504.0f,
+	                              1e-40f, 3.0f, 0.5f};
+	for (int model = 1; model <= 4; model++) {
+		slab_make(&S, 1.0f, 0.0f);
+		for (int i = 0; i < W * H; i++) {
+			S.thick[i] = pix_t[i % 8];
+			for (int c = 0; c < 3; c++)
+				S.back[3 * i + c] = pix_b[(i / 8) % 8];
+		}
+		S.back[3 * 40] = NAN;
+		S.back[3 * 41 + 1] = INFINITY;
+		S.p.facing = (sss_image){S.facing, W, H, 1, 0};
+		S.facing[5] = NAN;
+		sss_material m = skin(model, 0.02f);
+		char id[48];
+		snprintf(id, sizeof id, "extremes.apply.%d", model);
+		CHECK_STATUS(id, SSS_OK, run(&S, &m, 1, err, sizeof err));
+		snprintf(id, sizeof id, "extremes.finite.%d", model);
+		CHECK(id, all_finite(S.out, W * H * 3), "non-finite output");
+	}
+	/* Negative or NaN thickness adds nothing: a slab of them stays dark. */
+	for (int i = 0; i < 2; i++) {
+		slab_make(&S, 1.0f, i ? NAN : -0.5f);
+		sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.02f);
+		run(&S, &m, 1, err, sizeof err);
+		CHECK(i ? "extremes.nan-thickness-dark" : "extremes.negative-"
+		      "thickness-dark", front(&S, 0) == 0.0f, "%g",
+		      (double)front(&S, 0));
+	}
+	/* radius_scale 0 is the identity, transmission included. */
+	slab_make(&S, 1.0f, 0.0f);
+	for (int i = 0; i < W * H * 3; i++)
+		S.dd[i] = 0.25f + 0.001f * (float)i;
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.02f);
+	run(&S, &m, 0.0f, err, sizeof err);
+	CHECK("extremes.radius-scale-0", memcmp(S.out, S.dd, sizeof S.dd) == 0,
+	      "not the identity");
+	/* Energy: with random back light and thickness, the added light never
+	 * exceeds the light arriving at the back, pixel by pixel before the
+	 * blur (strength 1, white) and in total after it. */
+	unsigned seed = 12345;
+	double added = 0.0, arrived = 0.0;
+	slab_make(&S, 0.0f, 0.0f);
+	for (int i = 0; i < W * H; i++) {
+		seed = seed * 1103515245u + 12345u;
+		S.thick[i] = (float)((seed >> 8) % 1000) * 1e-5f;
+		for (int c = 0; c < 3; c++) {
+			seed = seed * 1103515245u + 12345u;
+			S.back[3 * i + c] = (float)((seed >> 8) % 1000) * 1e-3f;
+			arrived += S.back[3 * i + c];
+		}
+	}
+	for (int model = 1; model <= 4; model++) {
+		sss_material mm = skin(model, 0.03f);
+		mm.transmission_scale = 10.0f;
+		run(&S, &mm, 1, err, sizeof err);
+		added = 0.0;
+		for (int i = 0; i < W * H * 3; i++)
+			added += S.out[i];
+		char id[48];
+		snprintf(id, sizeof id, "energy.total.%d", model);
+		CHECK(id, added <= arrived * 1.0001 && added > 0.0, "added %g, "
+		      "arrived %g", added, arrived);
+	}
+}
+
+static void test_validation(void)
+{
+	char err[256];
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	m.transmission = 7;
+	CHECK_STATUS("valid.model", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&m, err, sizeof err));
+	CHECK("valid.model.msg", strstr(err, "transmission") != NULL, "%s", err);
+	m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	m.transmission_strength = 1.5f;
+	sss_material_validate(&m, err, sizeof err);
+	CHECK("valid.strength", strstr(err, "transmission_strength") != NULL,
+	      "%s", err);
+	m = skin(SSS_TRANSMISSION_BEER_LAMBERT, 0.01f);
+	m.transmission_color[2] = NAN;
+	sss_material_validate(&m, err, sizeof err);
+	CHECK("valid.color", strstr(err, "transmission_color.b") != NULL, "%s",
+	      err);
+	m = skin(SSS_TRANSMISSION_BEER_LAMBERT, 0.01f);
+	m.transmission_distance = 0.0f;
+	sss_material_validate(&m, err, sizeof err);
+	CHECK("valid.distance", strstr(err, "transmission_distance") != NULL,
+	      "%s", err);
+	m = skin(SSS_TRANSMISSION_FAST, 0.01f);
+	m.transmission_power = -1.0f;
+	sss_material_validate(&m, err, sizeof err);
+	CHECK("valid.power", strstr(err, "transmission_power") != NULL, "%s",
+	      err);
+	m = skin(SSS_TRANSMISSION_FAST, 0.01f);
+	m.thickness_scale = INFINITY;
+	sss_material_validate(&m, err, sizeof err);
+	CHECK("valid.thickness-scale", strstr(err, "thickness_scale") != NULL,
+	      "%s", err);
+	/* Off: the other fields are not read, so not checked. */
+	m = skin(SSS_TRANSMISSION_OFF, 0.01f);
+	m.transmission_strength = NAN;
+	CHECK_STATUS("valid.off-unchecked", SSS_OK,
+	             sss_material_validate(&m, err, sizeof err));
+
+	/* Passes: back light without thickness, wrong size, aliasing. */
+	slab_make(&S, 1.0f, 0.0f);
+	m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	S.p.thickness.data = NULL;
+	CHECK_STATUS("passes.no-thickness", SSS_ERR_MISSING_PASS,
+	             run(&S, &m, 1, err, sizeof err));
+	CHECK("passes.no-thickness.msg", strstr(err, "Thickness") != NULL, "%s",
+	      err);
+	slab_make(&S, 1.0f, 0.0f);
+	S.p.back_dir.width = W / 2;
+	CHECK_STATUS("passes.size", SSS_ERR_SIZE_MISMATCH,
+	             run(&S, &m, 1, err, sizeof err));
+	CHECK("passes.size.msg", strstr(err, "BackDir") != NULL, "%s", err);
+	slab_make(&S, 1.0f, 0.0f);
+	S.p.thickness.channels = 0;
+	CHECK_STATUS("passes.channels", SSS_ERR_INVALID_ARGUMENT,
+	             run(&S, &m, 1, err, sizeof err));
+	slab_make(&S, 1.0f, 0.0f);
+	S.p.back_ind = (sss_image){S.out, W, H, 3, 0};
+	CHECK_STATUS("passes.alias", SSS_ERR_INVALID_ARGUMENT,
+	             run(&S, &m, 1, err, sizeof err));
+	CHECK("passes.alias.msg", strstr(err, "BackInd") != NULL, "%s", err);
+	/* Without a transmitting material, the back-light passes are only
+	 * checked, never required. */
+	slab_make(&S, 1.0f, 0.0f);
+	m = skin(SSS_TRANSMISSION_OFF, 0.01f);
+	S.p.thickness.data = NULL;
+	CHECK_STATUS("passes.not-needed", SSS_OK,
+	             run(&S, &m, 1, err, sizeof err));
+}
+
+static void test_scene_json(void)
+{
+	const char *json =
+		"{\"materials\": [{\"pass_index\": 2, \"profile\": \"burley\","
+		" \"transmission\": \"beer-lambert\", \"transmission_strength\": 0.5,"
+		" \"transmission_color\": [0.9, 0.2, 0.1],"
+		" \"transmission_distance\": 0.003, \"transmission_translucency\": 0.5,"
+		" \"transmission_distortion\": 0.1, \"transmission_power\": 8,"
+		" \"transmission_scale\": 2, \"transmission_ambient\": 0.1,"
+		" \"thickness_scale\": 1.5}]}";
+	sss_scene *sc = NULL;
+	char warn[256], err[256];
+	CHECK_STATUS("json.parse", SSS_OK, sss_scene_parse(json, strlen(json),
+	             &sc, warn, sizeof warn, err, sizeof err));
+	if (sc) {
+		int32_t n;
+		const sss_material *m = sss_scene_materials(sc, &n);
+		CHECK("json.fields", n == 1 &&
+		      m->transmission == SSS_TRANSMISSION_BEER_LAMBERT &&
+		      m->transmission_strength == 0.5f &&
+		      m->transmission_color[1] == 0.2f &&
+		      m->transmission_distance == 0.003f &&
+		      m->transmission_translucency == 0.5f &&
+		      m->transmission_distortion == 0.1f &&
+		      m->transmission_power == 8.0f &&
+		      m->transmission_scale == 2.0f &&
+		      m->transmission_ambient == 0.1f &&
+		      m->thickness_scale == 1.5f, "fields differ");
+		CHECK("json.no-warnings", warn[0] == '\0', "%s", warn);
+		sss_scene_free(sc);
+	}
+	const char *bad = "{\"materials\": [{\"pass_index\": 2, \"profile\": "
+	                  "\"burley\", \"transmission\": \"beer\"}]}";
+	sc = NULL;
+	CHECK_STATUS("json.bad-model", SSS_ERR_INVALID_ARGUMENT,
+	             sss_scene_parse(bad, strlen(bad), &sc, NULL, 0, err,
+	                             sizeof err));
+	CHECK("json.bad-model.msg", strstr(err, "materials[0].transmission") &&
+	      strstr(err, "beer-lambert"), "%s", err);
+	const char *range = "{\"materials\": [{\"pass_index\": 2, \"profile\": "
+	                    "\"burley\", \"transmission_distance\": 0}]}";
+	CHECK_STATUS("json.range", SSS_ERR_INVALID_ARGUMENT,
+	             sss_scene_parse(range, strlen(range), &sc, NULL, 0, err,
+	                             sizeof err));
+	CHECK("json.range.msg", strstr(err, "transmission_distance") != NULL,
+	      "%s", err);
+}
+
+/* The back-light layer of a Blender EXR, end to end: the 8x8 Cycles
+ * render gets a layer SSSBackLight (DiffDir, DiffInd, SSSThicknessSq);
+ * with transmission its SSS light is brighter by what crossed, and the
+ * auto-picked layer is still the render's own. */
+static void test_process(void)
+{
+	char dir[] = "/tmp/sss_trans_XXXXXX";
+	if (!mkdtemp(dir)) {
+		CHECK("process.tmpdir", 0, "mkdtemp failed");
+		return;
+	}
+	char in[96], out_on[96], out_off[96], err[512];
+	snprintf(in, sizeof in, "%s/in.exr", dir);
+	snprintf(out_on, sizeof out_on, "%s/on.exr", dir);
+	snprintf(out_off, sizeof out_off, "%s/off.exr", dir);
+	sss_exr *exr = NULL;
+	if (sss_exr_read("tests/data/blender_8x8.exr", NULL, &exr, err,
+	                 sizeof err) != SSS_OK) {
+		CHECK("process.read", 0, "%s", err);
+		return;
+	}
+	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
+	float *rgb = calloc((size_t)w * h * 3, sizeof *rgb);
+	float *sq = calloc((size_t)w * h, sizeof *sq);
+	for (int i = 0; i < w * h * 3; i++)
+		rgb[i] = 0.5f;
+	for (int i = 0; i < w * h; i++)
+		sq[i] = 0.004f * 0.004f;
+	CHECK_STATUS("process.add", SSS_OK,
+	             sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffDir", "RGB",
+	                              rgb, err, sizeof err));
+	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffInd", "RGB", rgb, err,
+	                 sizeof err);
+	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, "X",
+	                 sq, err, sizeof err);
+	CHECK_STATUS("process.write", SSS_OK,
+	             sss_exr_write(exr, in, NULL, err, sizeof err));
+	sss_exr_free(exr);
+	free(rgb);
+	free(sq);
+
+	const char *tmpl =
+		"{\"materials\": [{\"pass_index\": 1, \"profile\": \"burley\","
+		" \"radius\": [0.12, 0.048, 0.024], \"transmission\": \"%s\"}]}";
+	double mean[2] = {0, 0};
+	for (int on = 0; on < 2; on++) {
+		char json[256];
+		snprintf(json, sizeof json, tmpl, on ? "burley" : "off");
+		sss_scene *sc = NULL;
+		sss_scene_parse(json, strlen(json), &sc, NULL, 0, err, sizeof err);
+		const char *o = on ? out_on : out_off;
+		CHECK_STATUS(on ? "process.on" : "process.off", SSS_OK,
+		             sss_process_exr(in, o, sc, NULL, NULL, err,
+		                             sizeof err));
+		sss_scene_free(sc);
+		sss_exr *res = NULL;
+		sss_image light, index;
+		if (sss_exr_read(o, NULL, &res, err, sizeof err) == SSS_OK &&
+		    sss_exr_find(res, "SSS", "DiffLight", &light) == SSS_OK) {
+			sss_passes p;
+			const char *layer = NULL;
+			sss_exr_render_passes(res, NULL, &p, &layer, err, sizeof err);
+			CHECK("process.auto-layer", layer &&
+			      strcmp(layer, SSS_BACKLIGHT_LAYER) != 0, "%s",
+			      layer ? layer : "(none)");
+			index = p.index_ma;
+			int n = 0;
+			for (int i = 0; i < w * h; i++)
+				if (index.data && fabsf(index.data[i] - 1.0f) < 0.5f) {
+					mean[on] += light.data[3 * i];
+					n++;
+				}
+			mean[on] /= n ? n : 1;
+		}
+		sss_exr_free(res);
+	}
+	/* Thickness 4 mm, red d = 0.12 / 4 pi: T = 0.89 or so, B = 1. */
+	CHECK("process.brighter", mean[1] > mean[0] + 0.5, "on %g, off %g",
+	      mean[1], mean[0]);
+	unlink(in);
+	unlink(out_on);
+	unlink(out_off);
+	rmdir(dir);
+}
+
+int main(void)
+{
+	test_slab();
+	test_models();
+	test_extremes();
+	test_validation();
+	test_scene_json();
+	test_process();
+	return tu_finish("test_transmission");
+}
