@@ -40,7 +40,7 @@ TEXTURING = [
 METHODS = [
     ("SEPARABLE", "Separable", "Two 1-D passes: fast", 0),
     ("SEPARABLE_EXACT", "Separable Exact", "Two 1-D passes per Gaussian "
-     "lobe: exact for Gaussian sums, Burley fitted; about 3x Separable", 1),
+     "lobe: exact for Gaussian sums, Burley fitted; slower than Separable", 1),
     ("DISK", "Disk", "Stochastic disk samples (64 per pixel): grainy on "
      "fine detail", 2),
     ("REFERENCE", "Reference", "Brute-force 2-D: slow, exact in screen "
