@@ -16,6 +16,8 @@ KIND:
          the side and a back light (compare.py's second bundled scene)
   mixed  a skin sphere and a jade monkey (two profiles) behind a grey,
          non-scattering pillar, side and back light (the third)
+  slab   a thin (1.5 cm) random-walk skin slab facing the camera, lit only
+         from behind (back-lit transmission's test)
 Rendering is Cycles at low resolution and samples; denoising and light
 clamping are off so Blender's Combined is exactly the sum of its passes.
 """
@@ -32,7 +34,8 @@ from mathutils import Vector
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="build_scene.py")
-    p.add_argument("--kind", choices=("demo", "head", "two", "none", "marble", "mixed"), required=True)
+    p.add_argument("--kind", choices=("demo", "head", "two", "none", "marble", "mixed",
+                                            "slab"), required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--samples", type=int, default=8)
@@ -242,6 +245,25 @@ def build_mixed(scene):
     cam.data.lens = 50
 
 
+def build_slab(scene):
+    """A thin skin slab (1.5 cm) facing the camera, lit only from behind by
+    an area light: its front glows only through transmission."""
+    skin = random_walk(material("Skin", **{
+        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.02,
+        "Subsurface Radius": (1.0, 0.5, 0.25),
+        "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.6}))
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0))
+    slab = bpy.context.active_object
+    slab.scale = (0.3, 0.015, 0.3)
+    assign(slab, skin)
+    light("AREA", "Back", 30.0, (0.0, 0.5, 0.0), (0, 0, 0), 0.4)
+    aim(scene.objects["Back"], (0, 0, 0))
+    cam = scene.camera
+    cam.location = (0.0, -1.0, 0.0)
+    aim(cam, (0, 0, 0))
+    cam.data.lens = 50
+
+
 def main():
     args = parse_args()
     scene = bpy.context.scene
@@ -255,6 +277,8 @@ def main():
         build_marble(scene)
     elif args.kind == "mixed":
         build_mixed(scene)
+    elif args.kind == "slab":
+        build_slab(scene)
     else:
         build_two(scene, scatter=args.kind == "two")
     scene.world.use_nodes = True

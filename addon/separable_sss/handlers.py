@@ -37,7 +37,9 @@ def on_init(scene, *_):
     except pipeline.SSSError as e:
         print(f"SSS: {scene.name}: {e}; frames are left alone", flush=True)
         return
-    block = switched_off(scene, analysis)
+    # Adding a view layer once the render has started is not safe: frames
+    # rendered with -a get no back-light layer (no transmission).
+    block = switched_off(scene, analysis, backlight=False)
     block.__enter__()
     settings = scene.render.image_settings
     saved = (settings.file_format, settings.color_depth, settings.exr_codec)

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import analysis, native
+from . import analysis, native, transmission
 from .analysis import Analysis, Found, analyse  # noqa: F401
 from .switch_off import switched_off
 
@@ -97,6 +97,8 @@ def _material_entry(found):
                      balance=s.near_far_balance,
                      near_sigma=list(s.near_sigma),
                      far_sigma=list(s.far_sigma))
+    if s.profile != "NONE":
+        entry.update(transmission.material_fields(found))
     return entry
 
 
@@ -205,7 +207,7 @@ def prepare_last_render(context):
     inp, out, desc = paths_for(scene, scene.frame_current)
     # Pass indices must be those the render used: assign them the same way
     # (and put everything back) to describe the materials.
-    with switched_off(scene, found):
+    with switched_off(scene, found, backlight=False):
         write_description(scene, found, desc)
     save_passes(scene, inp)
     return Job(inp, out, desc, context.view_layer.name,

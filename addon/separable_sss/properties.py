@@ -48,6 +48,28 @@ METHODS = [
 ]
 
 
+TRANSMISSION = [
+    ("OFF", "Off", "No light through thin parts from behind", 0),
+    ("BURLEY", "Profile", "The profile's own transmittance (Burley: "
+     "e^-t/d / 4 + 3 e^-t/3d / 4; Gaussian sums likewise): consistent "
+     "with the blur", 1),
+    ("JIMENEZ", "Jimenez", "Jimenez et al. 2010: d'Eon's skin Gaussians "
+     "through s = t 8.25 (1 - translucency) / width", 2),
+    ("BEER_LAMBERT", "Beer-Lambert", "The colour seen through the given "
+     "distance: colour ^ (thickness / distance)", 3),
+    ("FAST", "Fast (GDC 2011)", "pow(N.V (1 - distortion), power) x scale "
+     "+ ambient, fading out at the distance: an artist model", 4),
+]
+
+BACKLIGHT_LAYER = [
+    ("AUTO", "Auto", "Render the back-light layer when a transmitting "
+     "material is lit from behind (a light past 75 degrees from the "
+     "camera, or a bright world)", 0),
+    ("ALWAYS", "Always", "Whenever a scattering material transmits", 1),
+    ("NEVER", "Never", "No transmission", 2),
+]
+
+
 class SSSMaterialSettings(bpy.types.PropertyGroup):
     profile: EnumProperty(name="Profile", items=PROFILES, default="BLENDER")
     strength: FloatProperty(
@@ -96,6 +118,37 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
                                    default=(1.0, 0.12, 0.10))
     taps: IntProperty(name="Taps", min=0, max=4097, default=0,
                       description="Taps per 1-D pass, 0 = the scene's")
+    transmission: EnumProperty(
+        name="Transmission", items=TRANSMISSION, default="BURLEY",
+        description="Light through thin parts lit from behind (ears, "
+        "fingers, jade, wax, leaves)")
+    transmission_strength: FloatProperty(
+        name="Strength", min=0.0, max=1.0, default=1.0,
+        description="Share of the back light that crosses")
+    transmission_color: FloatVectorProperty(
+        name="Color", size=3, min=0.0, max=1.0, subtype="COLOR",
+        default=(1.0, 1.0, 1.0),
+        description="Tint; Beer-Lambert: the colour seen through Distance")
+    transmission_distance: FloatProperty(
+        name="Distance", min=1e-6, soft_max=0.1, default=0.01, precision=4,
+        subtype="DISTANCE", unit="LENGTH",
+        description="Beer-Lambert: where the colour is measured; Fast: "
+        "the thickness where it fades out")
+    transmission_translucency: FloatProperty(
+        name="Translucency", min=0.0, max=1.0, default=0.83,
+        description="Jimenez: 1 lets everything through")
+    transmission_distortion: FloatProperty(
+        name="Distortion", min=0.0, max=1.0, default=0.2,
+        description="Fast: normal shift of the light vector")
+    transmission_power: FloatProperty(name="Power", min=0.01,
+                                      soft_max=32.0, default=4.0)
+    transmission_scale: FloatProperty(name="Scale", min=0.0, soft_max=10.0,
+                                      default=1.0)
+    transmission_ambient: FloatProperty(name="Ambient", min=0.0,
+                                        soft_max=1.0, default=0.0)
+    thickness_scale: FloatProperty(
+        name="Thickness Scale", min=0.0, soft_max=10.0, default=1.0,
+        description="Multiplies the measured thickness (below 1: thinner)")
 
 
 class SSSSceneSettings(bpy.types.PropertyGroup):
@@ -116,6 +169,14 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
         name="Apply to Animation Renders", default=False,
         description="Render Animation (and blender -b -a) renders with "
         "material SSS off and writes each frame's SSS result beside it")
+    transmission_layer: EnumProperty(
+        name="Back-Light Layer", items=BACKLIGHT_LAYER, default="AUTO",
+        description="The extra view layer that measures light arriving "
+        "from behind and thickness, for transmission")
+    transmission_samples: IntProperty(
+        name="Back-Light Samples", min=0, max=65536, default=0,
+        description="Samples of the back-light layer (its light is "
+        "blurred, so few do); 0 = a quarter of the scene's, at least 4")
     last_result: StringProperty(name="Last Result", subtype="FILE_PATH",
                                 default="")
 

@@ -154,14 +154,19 @@ def _enable_passes(scene, analysis, undo):
 
 
 @contextmanager
-def switched_off(scene, analysis):
+def switched_off(scene, analysis, backlight=True):
     """Within the block the scene renders without material SSS and with
-    the passes libsss needs; on leaving (normally or by an exception) every
-    changed value, link and node is restored."""
+    the passes libsss needs (and, with backlight, the back-light view layer
+    when a transmitting material is lit from behind: transmission.py); on
+    leaving (normally or by an exception) every changed value, link, node,
+    layer and material is restored or removed."""
+    from . import transmission
     undo = _Undo()
     try:
         _free_pass_indices(scene, analysis, undo)
         _enable_passes(scene, analysis, undo)
+        if backlight:
+            transmission.add_layer(scene, analysis, undo)
         for found in analysis.found:
             tree = found.material.node_tree
             if found.node.type == "BSDF_PRINCIPLED":

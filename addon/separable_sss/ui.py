@@ -90,12 +90,54 @@ def draw_material_settings(layout, context, mat, split=True):
         col.prop(s, "far_sigma")
     col.prop(s, "radius_scale")
 
+    _draw_transmission(layout, context, s, split)
+
     col = layout.column()
     col.prop(s, "taps")
     col.prop(mat, "pass_index")
     if mat.pass_index == 0:
         _wrapped(col, context, "Pass index 0: a free one is given for the "
                  "time of each render", 'INFO')
+
+
+def _draw_transmission(layout, context, s, split):
+    """Back-lit transmission: the model and its fields."""
+    col = layout.column()
+    _prop(col, s, "transmission", split)
+    if s.transmission == 'OFF':
+        return
+    col.prop(s, "transmission_strength", slider=True)
+    col.prop(s, "transmission_color")
+    if s.transmission == 'JIMENEZ':
+        col.prop(s, "transmission_translucency", slider=True)
+    elif s.transmission in {'BEER_LAMBERT', 'FAST'}:
+        col.prop(s, "transmission_distance")
+    if s.transmission == 'FAST':
+        col.prop(s, "transmission_distortion", slider=True)
+        col.prop(s, "transmission_power")
+        col.prop(s, "transmission_scale")
+        col.prop(s, "transmission_ambient")
+    col.prop(s, "thickness_scale")
+
+
+def _draw_backlight(layout, context, scene):
+    """The scene's back-light layer: the setting, whether this render gets
+    it and why, and what it costs."""
+    from . import transmission
+    s = scene.sss
+    col = layout.column()
+    _prop(col, s, "transmission_layer", False)
+    col.prop(s, "transmission_samples")
+    try:
+        need, why = transmission.wanted(scene, pipeline.analyse(scene))
+    except Exception as ex:
+        need, why = False, "could not analyse the scene: %s" % ex
+    if need:
+        _wrapped(col, context, "Back-light layer on (%s), %d samples: %s"
+                 % (why, transmission.layer_samples(scene),
+                    transmission.COST_NOTE), 'LIGHT')
+    else:
+        _wrapped(col, context, "No back-light layer: " + why, 'INFO')
 
 
 class SSS_PT_node_main(bpy.types.Panel):
@@ -131,6 +173,7 @@ class SSS_PT_node_main(bpy.types.Panel):
         col.prop(s, "radius_scale")
         _prop(col, s, "output_dir", False)
         col.prop(s, "use_animation")
+        _draw_backlight(layout, context, scene)
 
         col = layout.column(align=True)
         if s.last_result:

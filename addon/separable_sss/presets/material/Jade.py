@@ -12,3 +12,14 @@ material.sss.albedo = (0.8, 0.95, 0.85)
 material.sss.radius_scale = 1.0
 material.sss.strength = 1.0
 material.sss.texturing = 'POST'
+# Transmission: Beer-Lambert, green seen through 1 cm of jade.
+material.sss.transmission = 'BEER_LAMBERT'
+material.sss.transmission_strength = 1.0
+material.sss.transmission_color = (0.35, 0.8, 0.5)
+material.sss.transmission_distance = 0.01
+material.sss.transmission_translucency = 0.83
+material.sss.transmission_distortion = 0.2
+material.sss.transmission_power = 4.0
+material.sss.transmission_scale = 1.0
+material.sss.transmission_ambient = 0.0
+material.sss.thickness_scale = 1.0

@@ -13,3 +13,14 @@ material.sss.albedo = (0.9585, 0.838, 0.678)
 material.sss.radius_scale = 1.0
 material.sss.strength = 1.0
 material.sss.texturing = 'POST'
+# Transmission: the profile's own (ears and fingers glow red).
+material.sss.transmission = 'BURLEY'
+material.sss.transmission_strength = 1.0
+material.sss.transmission_color = (1, 1, 1)
+material.sss.transmission_distance = 0.01
+material.sss.transmission_translucency = 0.83
+material.sss.transmission_distortion = 0.2
+material.sss.transmission_power = 4.0
+material.sss.transmission_scale = 1.0
+material.sss.transmission_ambient = 0.0
+material.sss.thickness_scale = 1.0

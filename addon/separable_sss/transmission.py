@@ -1,0 +1,269 @@
+"""Back-lit transmission: the extra view layer that gives libsss the light
+arriving through thin parts from behind, and the thickness there.
+
+Facts this rests on (Blender 3.4, Cycles): light through a Translucent BSDF
+lands in the diffuse passes, not the transmission ones, so it cannot be told
+apart from front light inside one view layer. A second view layer whose
+material override is a white Translucent BSDF has, in DiffDir + DiffInd,
+exactly the light that reaches each visible point through the object from
+behind, shadows included. Its override material also writes two AOVs:
+
+- SSSThicknessSq: Ambient Occlusion (Inside, Only Local, Distance D) x D^2.
+  Inside, AO is the share of cosine-distributed rays into the object that
+  travel further than D; in a slab of thickness t a ray at angle theta
+  travels t / cos(theta), so AO = (t / D)^2 and AO x D^2 = t^2. Averaged
+  over the samples first, the library takes the square root (a root per
+  sample would be biased low for thin parts, where AO is 0 most of the
+  time). Parts thicker than D read as D: D is chosen where every model's
+  transmittance is already negligible.
+- SSSFacing: N . V (Geometry Normal . Incoming), the fast model's view term.
+
+The layer renders at its own sample count (ViewLayer.samples, which Cycles
+honours per layer): its light is blurred afterwards, so few samples do.
+The add-on asks for it only when a scattering material transmits and a light
+can reach one of its objects from behind (or the world is bright), and
+removes it, its material and its AOVs afterwards."""
+import math
+
+import bpy
+from mathutils import Vector
+
+LAYER = "SSSBackLight"             # SSS_BACKLIGHT_LAYER in csrc/sss.h
+THICKNESS_AOV = "SSSThicknessSq"   # SSS_THICKNESS_SQ_PASS
+FACING_AOV = "SSSFacing"           # SSS_FACING_PASS
+MATERIAL = "SSS Back Light Override"
+TAG = "SSS back light"
+
+# A light counts as "behind" when the angle between the directions from the
+# object to it and to the camera exceeds this (75 degrees: side lights
+# that graze thin edges count, front lights do not).
+BEHIND_COS = math.cos(math.radians(75.0))
+# The world lights thin parts from behind when its colour x strength is at
+# least this (luminance), or when its colour is textured.
+WORLD_THRESHOLD = 0.1
+# Render cost of the layer, measured on the head scene (make compare's
+# first scene, 160x120, CPU): see README, Back-lit transmission.
+COST_NOTE = "about +30 % render time at a quarter of the samples"
+
+MODELS = {"OFF": "off", "BURLEY": "burley", "JIMENEZ": "jimenez",
+          "BEER_LAMBERT": "beer-lambert", "FAST": "fast"}
+
+
+def transmitting(analysis):
+    """The found materials whose transmission is on."""
+    return [f for f in analysis.found
+            if f.material.sss.profile != "NONE" and
+            f.material.sss.transmission != "OFF"]
+
+
+def _objects_with(scene, material):
+    for obj in scene.objects:
+        if obj.hide_render or not hasattr(obj, "material_slots"):
+            continue
+        if any(slot.material == material for slot in obj.material_slots):
+            yield obj
+
+
+def _centre(obj):
+    corners = [obj.matrix_world @ Vector(c) for c in obj.bound_box]
+    return sum(corners, Vector()) / len(corners)
+
+
+def _world_is_bright(scene):
+    world = scene.world
+    if world is None:
+        return False
+    if not world.use_nodes or world.node_tree is None:
+        c = world.color
+        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] >= \
+            WORLD_THRESHOLD
+    for node in world.node_tree.nodes:
+        if node.type != "BACKGROUND":
+            continue
+        col, strength = node.inputs["Color"], node.inputs["Strength"]
+        if col.is_linked or strength.is_linked:
+            return True
+        c = col.default_value
+        lum = (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]) * \
+            strength.default_value
+        if lum >= WORLD_THRESHOLD:
+            return True
+    return False
+
+
+def lights_behind(scene, analysis):
+    """Names of what lights a transmitting material's objects from behind
+    (lights, "World"); empty when nothing does."""
+    if scene.camera is None:
+        return []
+    cam = scene.camera.matrix_world.translation
+    names = []
+    lights = [o for o in scene.objects if o.type == "LIGHT" and
+              not o.hide_render and o.data.energy > 0.0]
+    for found in transmitting(analysis):
+        for obj in _objects_with(scene, found.material):
+            centre = _centre(obj)
+            to_cam = (cam - centre).normalized()
+            for light in lights:
+                if light.data.type == "SUN":
+                    to_light = (light.matrix_world.to_3x3() @
+                                Vector((0.0, 0.0, 1.0))).normalized()
+                else:
+                    to_light = (light.matrix_world.translation -
+                                centre).normalized()
+                if to_light.dot(to_cam) < BEHIND_COS and \
+                        light.name not in names:
+                    names.append(light.name)
+    if transmitting(analysis) and _world_is_bright(scene):
+        names.append("World")
+    return names
+
+
+def wanted(scene, analysis):
+    """(bool, why): whether the render needs the back-light layer."""
+    mode = scene.sss.transmission_layer
+    mats = transmitting(analysis)
+    if not mats:
+        return False, "no scattering material has transmission on"
+    if mode == "NEVER":
+        return False, "the back-light layer is turned off"
+    if mode == "ALWAYS":
+        return True, "always on"
+    behind = lights_behind(scene, analysis)
+    if not behind:
+        return False, "no light reaches a transmitting material from behind"
+    return True, "lit from behind by " + ", ".join(behind)
+
+
+def _len_metres(found, scene):
+    """How thick a part can be before its transmittance is negligible
+    (< 1 %), in metres: the AO distance must reach that far."""
+    from .pipeline import support_metres
+    s = found.material.sss
+    scale = scene.sss.radius_scale * s.radius_scale
+    if s.transmission == "BURLEY":
+        return support_metres(scene, found)     # 16 d: T < 0.4 %
+    if s.transmission == "JIMENEZ":
+        # sum w e^{-s^2/v} < 1 % at s = 5 mm of d'Eon's profile.
+        k = 8.25 * (1.0 - s.transmission_translucency)
+        if k <= 0.0:
+            return support_metres(scene, found)
+        width = s.jimenez_width if s.profile == "JIMENEZ" else 0.012
+        return 5.0 * width * scale / k
+    if s.transmission == "BEER_LAMBERT":
+        c = max(min(max(s.transmission_color), 0.999), 1e-3)
+        return s.transmission_distance * scale * math.log(0.01) / \
+            math.log(c)
+    return s.transmission_distance * scale      # fast: gone at distance
+
+
+def ao_distance(scene, analysis):
+    """D, in scene units: the thickest part any transmitting material
+    still lets light through."""
+    metres = max([_len_metres(f, scene) for f in transmitting(analysis)] +
+                 [1e-6])
+    unit = scene.unit_settings.scale_length or 1.0
+    return metres / unit
+
+
+def layer_samples(scene):
+    s = scene.sss.transmission_samples
+    return s if s > 0 else max(4, scene.cycles.samples // 4)
+
+
+def _override_material(distance, undo):
+    mat = bpy.data.materials.new(MATERIAL)
+    undo.add(lambda: bpy.data.materials.remove(mat))
+    mat.use_nodes = True
+    tree = mat.node_tree
+    for node in list(tree.nodes):
+        tree.nodes.remove(node)
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    out.target = "CYCLES"
+    bsdf = tree.nodes.new("ShaderNodeBsdfTranslucent")
+    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    ao = tree.nodes.new("ShaderNodeAmbientOcclusion")
+    ao.inside = True
+    ao.only_local = True
+    ao.samples = 16
+    ao.inputs["Distance"].default_value = distance
+    sq = tree.nodes.new("ShaderNodeMath")
+    sq.operation = "MULTIPLY"
+    sq.inputs[1].default_value = distance * distance
+    tree.links.new(ao.outputs["AO"], sq.inputs[0])
+    aov = tree.nodes.new("ShaderNodeOutputAOV")
+    aov.name = THICKNESS_AOV        # in 3.4 the node's name is its AOV
+    tree.links.new(sq.outputs[0], aov.inputs["Value"])
+    geo = tree.nodes.new("ShaderNodeNewGeometry")
+    dot = tree.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    tree.links.new(geo.outputs["Normal"], dot.inputs[0])
+    tree.links.new(geo.outputs["Incoming"], dot.inputs[1])
+    facing = tree.nodes.new("ShaderNodeOutputAOV")
+    facing.name = FACING_AOV
+    tree.links.new(dot.outputs["Value"], facing.inputs["Value"])
+    for node in tree.nodes:
+        node.label = TAG
+    return mat
+
+
+def _copy_collections(src, dst):
+    """The new layer sees what the active one sees."""
+    dst.exclude = src.exclude
+    dst.holdout = src.holdout
+    dst.indirect_only = src.indirect_only
+    for a, b in zip(src.children, dst.children):
+        _copy_collections(a, b)
+
+
+def add_layer(scene, analysis, undo, source_layer=None):
+    """Adds the back-light view layer (undone by undo); returns it, or None
+    when the render does not need it."""
+    need, _why = wanted(scene, analysis)
+    if not need:
+        return None
+    if scene.render.engine != "CYCLES":
+        return None
+    if LAYER in scene.view_layers:
+        raise RuntimeError(f"the scene already has a view layer named "
+                           f"{LAYER}; rename it (the add-on uses that name "
+                           "for back-lit transmission)")
+    source = source_layer or bpy.context.view_layer
+    distance = ao_distance(scene, analysis)
+    mat = _override_material(distance, undo)
+    layer = scene.view_layers.new(LAYER)
+    undo.add(lambda: scene.view_layers.remove(layer))
+    if source is not None and source.name in scene.view_layers:
+        _copy_collections(source.layer_collection, layer.layer_collection)
+    layer.material_override = mat
+    undo.add(lambda: setattr(layer, "material_override", None))
+    layer.samples = layer_samples(scene)
+    layer.use_pass_diffuse_direct = True
+    layer.use_pass_diffuse_indirect = True
+    for name in (THICKNESS_AOV, FACING_AOV):
+        aov = layer.aovs.add()
+        aov.name = name
+        aov.type = "VALUE"
+    # Other view layers are left as they are: one render gives both.
+    return layer
+
+
+def material_fields(found):
+    """The scene-description keys of a material's transmission."""
+    s = found.material.sss
+    if s.transmission == "OFF":
+        return {"transmission": "off"}
+    return {
+        "transmission": MODELS[s.transmission],
+        "transmission_strength": s.transmission_strength,
+        "transmission_color": [min(max(float(c), 0.0), 1.0)
+                               for c in s.transmission_color],
+        "transmission_distance": s.transmission_distance * s.radius_scale,
+        "transmission_translucency": s.transmission_translucency,
+        "transmission_distortion": s.transmission_distortion,
+        "transmission_power": s.transmission_power,
+        "transmission_scale": s.transmission_scale,
+        "transmission_ambient": s.transmission_ambient,
+        "thickness_scale": s.thickness_scale,
+    }

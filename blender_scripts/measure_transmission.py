@@ -1,0 +1,218 @@
+"""Back-lit transmission against Cycles' random walk, on one scene.
+
+    blender -b --python-exit-code 1 --python \
+        blender_scripts/measure_transmission.py -- --scene head.blend \
+        --out out/transmission [--resolution 160x120] [--rw-samples 512] \
+        [--samples 64]
+
+Renders (same settings as compare.py: CPU, no denoising, indirect clamp
+10, no adaptive sampling):
+  1. the reference: the materials' own random-walk SSS;
+  2. material SSS switched off with the back-light layer (the add-on's
+     switched_off), timed, and the same without the layer (its cost);
+then runs the library twice on the SAME passes, with the materials'
+transmission and with it off, so the difference is transmission alone.
+
+Error (compare_metrics: RMSE and relative MAE, full and quarter
+resolution) over the scattering pixels and over the back-lit ones: the
+scattering pixels where the light arriving from behind (the back-light
+layer's DiffDir + DiffInd, luminance) is at least 5 % of its 99th
+percentile there. Writes results.txt, results.json and sheet.png
+(reference | blur alone | blur + transmission | back light, with the
+|error| maps below, same exposure)."""
+import argparse
+import json
+import os
+import sys
+import time
+import traceback
+
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, ".."))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, HERE)
+
+import numpy as np  # noqa: E402
+
+import compare_metrics as cm  # noqa: E402
+
+REF_SEED_OFFSET = 7919
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser(prog="measure_transmission.py")
+    p.add_argument("--scene", required=True)
+    p.add_argument("--out", required=True)
+    p.add_argument("--resolution", default="160x120")
+    p.add_argument("--rw-samples", type=int, default=512)
+    p.add_argument("--samples", type=int, default=64)
+    a = p.parse_args(argv)
+    a.resolution = tuple(int(v) for v in a.resolution.lower().split("x"))
+    return a
+
+
+def read_exr(path):
+    import OpenImageIO as oiio
+    inp = oiio.ImageInput.open(path)
+    spec = inp.spec()
+    px = inp.read_image(oiio.FLOAT)
+    inp.close()
+    return {n: np.array(px[:, :, i]) for i, n in
+            enumerate(spec.channelnames)}
+
+
+def rgb(ch, prefix):
+    return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
+
+
+def open_scene(args):
+    bpy.ops.wm.open_mainfile(filepath=args.scene)
+    scene = bpy.context.scene
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x, r.resolution_y = args.resolution
+    r.resolution_percentage = 100
+    r.use_compositing = False
+    r.use_sequencer = False
+    scene.cycles.device = "CPU"
+    scene.cycles.use_denoising = False
+    scene.cycles.sample_clamp_direct = 0.0
+    scene.cycles.sample_clamp_indirect = 10.0
+    scene.cycles.use_adaptive_sampling = False
+    return scene
+
+
+def render(scene):
+    t0 = time.perf_counter()
+    if bpy.ops.render.render() != {"FINISHED"}:
+        raise RuntimeError("render failed")
+    return time.perf_counter() - t0
+
+
+def write_png(path, img):
+    import OpenImageIO as oiio
+    h, w, _ = img.shape
+    out = oiio.ImageOutput.create(path)
+    out.open(path, oiio.ImageSpec(w, h, 3, oiio.UINT8))
+    out.write_image((np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8))
+    out.close()
+
+
+def main():
+    args = parse_args()
+    from separable_sss import native, pipeline, transmission
+    from separable_sss.switch_off import switched_off
+    os.makedirs(args.out, exist_ok=True)
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+
+    scene = open_scene(args)
+    scene.cycles.samples = args.rw_samples
+    scene.cycles.seed += REF_SEED_OFFSET
+    rw_s = render(scene)
+    pipeline.save_passes(scene, os.path.join(work, "rw.exr"))
+    ref = rgb(read_exr(os.path.join(work, "rw.exr")), "ViewLayer.Combined")
+
+    scene = open_scene(args)
+    scene.cycles.samples = args.samples
+    found = pipeline.analyse(scene)
+    need, why = transmission.wanted(scene, found)
+    times = {}
+    inp = os.path.join(work, "passes.exr")
+    for layer in (False, True):
+        with switched_off(scene, found, backlight=layer):
+            times[layer] = render(scene)
+            if layer:
+                pipeline.save_passes(scene, inp)
+                desc = pipeline.scene_description(scene, found)
+    results = {}
+    for on in (False, True):
+        d = json.loads(json.dumps(desc))
+        if not on:
+            for m in d["materials"]:
+                m["transmission"] = "off"
+        path = os.path.join(work, f"scene_{int(on)}.json")
+        with open(path, "w") as f:
+            json.dump(d, f, indent=1)
+        out = os.path.join(work, f"sss_{int(on)}.exr")
+        with native.Scene(path) as sc:
+            t = sc.process(inp, out, layer="ViewLayer")
+        results[on] = (rgb(read_exr(out), "SSS.Combined"), t["scatter"])
+
+    ch = read_exr(inp)
+    idx = np.rint(ch["ViewLayer.IndexMA.X"])
+    depth = ch["ViewLayer.Depth.Z"]
+    mask = np.isin(idx, [f.pass_index for f in found.found]) & (depth < 1e9)
+    back = np.zeros(mask.shape)
+    if f"{transmission.LAYER}.DiffDir.R" in ch:
+        b = rgb(ch, f"{transmission.LAYER}.DiffDir") + \
+            rgb(ch, f"{transmission.LAYER}.DiffInd")
+        back = b @ cm.LUMA
+    thresh = 0.05 * np.percentile(back[mask], 99) if mask.any() else 0
+    backlit = mask & (back > thresh) & (thresh > 0)
+    exposure = cm.exposure_for(ref, mask)
+
+    lines = [f"scene {args.scene} at {args.resolution[0]}x"
+             f"{args.resolution[1]}: reference random walk "
+             f"{args.rw_samples} spp ({rw_s:.1f} s); SSS off "
+             f"{args.samples} spp",
+             f"back-light layer: {'on' if need else 'off'} ({why}), "
+             f"{transmission.layer_samples(scene)} samples",
+             f"render without the layer {times[False]:.2f} s, with it "
+             f"{times[True]:.2f} s: +{times[True] - times[False]:.2f} s "
+             f"({100 * (times[True] / times[False] - 1):.0f} %)",
+             f"scattering pixels {int(mask.sum())}, back-lit "
+             f"{int(backlit.sum())}"]
+    summary = {"times": times, "need": need, "why": why}
+    for name, m in (("scattering", mask), ("back-lit", backlit)):
+        if not m.any():
+            continue
+        row = {}
+        for on in (False, True):
+            img = results[on][0]
+            q = cm.quarter(img, ref, m)
+            row[on] = dict(rmse=cm.rmse(img, ref, m),
+                           rel_mae=cm.rel_mae(img, ref, m),
+                           rmse_q=cm.rmse(*q) if q[2].any() else 0.0)
+        cut = 100 * (1 - row[True]["rmse"] / row[False]["rmse"])
+        cut_mae = 100 * (1 - row[True]["rel_mae"] / row[False]["rel_mae"])
+        lines.append(
+            f"{name:>10}: RMSE blur alone {row[False]['rmse']:.5f}, with "
+            f"transmission {row[True]['rmse']:.5f} ({cut:.0f} % less); "
+            f"rel. MAE {row[False]['rel_mae']:.4f} -> "
+            f"{row[True]['rel_mae']:.4f} ({cut_mae:.0f} % less); quarter-res "
+            f"RMSE {row[False]['rmse_q']:.5f} -> {row[True]['rmse_q']:.5f}")
+        summary[name] = {str(k): v for k, v in row.items()}
+    lines.append(f"library scatter time: off {results[False][1]:.3f} s, "
+                 f"on {results[True][1]:.3f} s")
+    text = "\n".join(lines)
+    print(text)
+    with open(os.path.join(args.out, "results.txt"), "w") as f:
+        f.write(text + "\n")
+    with open(os.path.join(args.out, "results.json"), "w") as f:
+        json.dump(summary, f, indent=1, default=float)
+
+    def show(img):
+        return np.clip(img * exposure, 0, None) ** (1 / 2.2)
+
+    b3 = np.repeat(back[:, :, None], 3, axis=2) * mask[:, :, None]
+    top = [ref, results[False][0], results[True][0], b3]
+    err = [np.zeros_like(ref)] + [np.abs(results[k][0] - ref) * 4
+                                  for k in (False, True)] + \
+        [np.stack([backlit] * 3, axis=-1).astype(np.float32) / exposure]
+    sheet = np.concatenate([np.concatenate([show(i) for i in top], axis=1),
+                            np.concatenate([show(i) for i in err], axis=1)],
+                           axis=0)
+    write_png(os.path.join(args.out, "sheet.png"), sheet)
+
+
+try:
+    import separable_sss
+    separable_sss.register()
+    main()
+except Exception:
+    traceback.print_exc()
+    sys.exit(1)

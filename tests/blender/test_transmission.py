@@ -1,0 +1,135 @@
+"""Back-lit transmission through the add-on, on a real Cycles render of a
+thin slab lit only from behind (build_scene.py --kind slab), headless."""
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+from helpers import BUILD, ROOT, build_blend, diff, snapshot
+
+os.environ.setdefault("SSS_LIB", os.path.join(BUILD, "libsss.so"))
+import sys  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+import separable_sss  # noqa: E402
+from separable_sss import pipeline, transmission  # noqa: E402
+
+from exr import read_channels  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    separable_sss.register()
+    yield
+    separable_sss.unregister()
+
+
+@pytest.fixture(scope="module")
+def slab(tmp_path_factory):
+    d = tmp_path_factory.mktemp("blends")
+    return build_blend("slab", str(d / "slab.blend"), size=40, samples=16)
+
+
+def open_scene(path, out_dir):
+    bpy.ops.wm.open_mainfile(filepath=path)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(out_dir)
+    scene.cycles.sample_clamp_indirect = 10.0
+    return scene
+
+
+def state(scene):
+    """What the back-light layer touches, beyond helpers.snapshot."""
+    return {"layers": [(l.name, l.material_override and
+                        l.material_override.name, l.samples,
+                        [(a.name, a.type) for a in l.aovs])
+                       for l in scene.view_layers],
+            "materials": sorted(m.name for m in bpy.data.materials),
+            "snapshot": snapshot(scene)}
+
+
+def rgb(ch, prefix):
+    return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
+
+
+def front(scene, tmp_path, model):
+    """Mean SSS.Combined over the slab, and the pass file's layers."""
+    bpy.data.materials["Skin"].sss.transmission = model
+    job = pipeline.prepare_render(bpy.context)
+    pipeline.scatter(job)
+    out = read_channels(job.output_exr)[0]
+    inp = read_channels(job.input_exr)[0]
+    # The slab is the only material (its index 0 gets a free one for the
+    # render and is restored after).
+    mask = np.rint(inp["ViewLayer.IndexMA.X"]) > 0
+    layers = {k.split(".")[0] for k in inp}
+    return rgb(out, "SSS.Combined")[mask].mean(axis=0), mask, layers
+
+
+def test_backlit_slab_brighter_and_closer_to_random_walk(slab, tmp_path):
+    scene = open_scene(slab, tmp_path)
+    need, why = transmission.wanted(scene, pipeline.analyse(scene))
+    assert need, why
+    off, mask, layers_off = front(scene, tmp_path, "OFF")
+    on, _, layers_on = front(scene, tmp_path, "BURLEY")
+    assert transmission.LAYER not in layers_off  # asked for only when on
+    assert transmission.LAYER in layers_on
+    # Cycles' random walk: the material's own SSS, more samples.
+    scene.cycles.samples = 64
+    scene.render.use_compositing = False
+    assert bpy.ops.render.render() == {"FINISHED"}
+    path = str(tmp_path / "rw.exr")
+    pipeline.save_passes(scene, path)
+    ref = rgb(read_channels(path)[0], "ViewLayer.Combined")[mask].mean(axis=0)
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    print("front luminance: off", off @ lum, "on", on @ lum,
+          "random walk", ref @ lum)
+    assert on @ lum > 2.0 * (off @ lum) + 1e-3
+    assert abs(on @ lum - ref @ lum) < abs(off @ lum - ref @ lum)
+
+
+def test_restored_after_success(slab, tmp_path):
+    scene = open_scene(slab, tmp_path)
+    before = state(scene)
+    job = pipeline.prepare_render(bpy.context)
+    assert transmission.LAYER in {k.split(".")[0]
+                                  for k in read_channels(job.input_exr)[0]}
+    after = state(scene)
+    assert after["layers"] == before["layers"]
+    assert after["materials"] == before["materials"]
+    assert diff(before["snapshot"], after["snapshot"]) == []
+
+
+@pytest.mark.parametrize("where", ["render", "cancel"])
+def test_restored_after_error(slab, tmp_path, monkeypatch, where):
+    scene = open_scene(slab, tmp_path)
+    before = state(scene)
+    monkeypatch.setenv("SSS_TEST_FAIL", where)
+    with pytest.raises(pipeline.SSSError):
+        pipeline.prepare_render(bpy.context)
+    after = state(scene)
+    assert after["layers"] == before["layers"]
+    assert after["materials"] == before["materials"]
+    assert diff(before["snapshot"], after["snapshot"]) == []
+
+
+def test_no_layer_without_light_from_behind(slab, tmp_path):
+    scene = open_scene(slab, tmp_path)
+    back = scene.objects["Back"]
+    back.location = (0.0, -0.6, 0.3)   # in front of the slab now
+    bpy.context.view_layer.update()     # matrix_world follows
+    need, why = transmission.wanted(scene, pipeline.analyse(scene))
+    assert not need and "behind" in why
+    scene.sss.transmission_layer = "ALWAYS"
+    assert transmission.wanted(scene, pipeline.analyse(scene))[0]
+    scene.sss.transmission_layer = "NEVER"
+    assert not transmission.wanted(scene, pipeline.analyse(scene))[0]
+
+
+def test_existing_layer_name_is_a_clear_error(slab, tmp_path):
+    scene = open_scene(slab, tmp_path)
+    scene.view_layers.new(transmission.LAYER)
+    before = state(scene)
+    with pytest.raises(Exception, match=transmission.LAYER):
+        pipeline.prepare_render(bpy.context)
+    assert state(scene)["layers"] == before["layers"]
