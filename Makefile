@@ -32,7 +32,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps test check valgrind fuzz demo demo-c report addon blender-test compare clean
+.PHONY: all deps test check valgrind fuzz demo demo-c report bench addon blender-test compare clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -156,6 +156,16 @@ demo-c: $(BUILD)/sss-demo
 $(BUILD)/sss-report: examples/method_report.c tests/synth.h $(BUILD)/libsss.so
 	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \
 		examples/method_report.c -L$(BUILD) -lsss -Wl,-rpath,'$$ORIGIN' $(LDLIBS)
+
+# The benchmark: cost per scattering pixel over sizes, coverage and radii
+# for every method, and the ratios that matter (threads, AVX2, reference,
+# Blender's Bilateral Blur, sss end to end vs oiiotool), into out/bench.
+$(BUILD)/sss-bench: bench/sss_bench.c tests/synth.h $(BUILD)/libsss.so
+	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \
+		bench/sss_bench.c -L$(BUILD) -lsss -Wl,-rpath,'$$ORIGIN' $(LDLIBS)
+
+bench: deps all $(BUILD)/sss-bench
+	@$(PYTHON) bench/run_bench.py --out out/bench --build $(BUILD)
 
 # Separable against reference for Burley at three radii, with timings.
 report: $(BUILD)/sss-report

@@ -31,6 +31,10 @@
 #define DENSE_MAX_HALF 32
 #define PARAMS 6 /* W_r W_g W_b, A_r/8 A_g/8 A_b/8 */
 
+/* Rows handled together, so that the transposed reads and writes fill
+ * whole cache lines instead of touching one page per pixel. */
+#define BLOCK 16
+
 /* The falloff is matched to the profile's mass at this off-plane distance,
  * as a fraction of the support. */
 #define MATCH_OFFSET 0.1
@@ -239,40 +243,55 @@ static void blur_taps(sss__blur1d *b, int32_t len, int32_t n,
 	}
 }
 
+/* What every pixel of row `row` of ctx->in shares; for a perspective
+ * camera two_xt and upp are per unit depth. */
+static void row_template(const pass_ctx *ctx, int32_t row, sss__blur1d *b)
+{
+	const plane *pl = &ctx->in;
+	const axis *ax = &ctx->ax;
+	size_t base = (size_t)row * pl->len;
+	double perp = (row + 0.5 - ax->c_perp) / ax->f_perp;
+	memset(b, 0, sizeof *b);
+	for (int c = 0; c < 3; c++) {
+		b->rgb[c] = pl->rgb[c] + base;
+		b->geo[c] = pl->geo[c] ? pl->geo[c] + base : NULL;
+	}
+	b->z = pl->z + base;
+	b->slot = pl->slot + base;
+	b->readable = (int64_t)pl->len * (pl->rows - row);
+	b->off_axis = (float)(0.5 - ax->c);
+	b->ife = ax->ortho ? 0.0f : (float)(1.0 / ax->f);
+	b->two_xt = (float)(2.0 / ax->f);
+	b->upp = (float)(1.0 / ax->f);
+	b->cz = ax->ortho ? 1.0f : (float)(1.0 + perp * perp);
+}
+
 /* The 1-D blur of row `row` of ctx->in at pixel i into out; 0 if it is
  * the identity there (kernel narrower than a pixel at this depth). */
-static int blur_pixel(const pass_ctx *ctx, int32_t row, int32_t i,
-                      float out[3])
+static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
+                      int32_t i, float out[3])
 {
 	const sss__job *job = ctx->job;
 	const plane *pl = &ctx->in;
-	size_t base = (size_t)row * pl->len;
-	int16_t slot = pl->slot[base + i];
+	int16_t slot = row->slot[i];
 	const sss__kernel *k = &job->kernels[slot];
 	const table *t = &ctx->tables[slot];
-	float zc = pl->z[base + i];
+	float zc = row->z[i];
 	int capped;
 	double r = half_width(job, k, &ctx->ax, pl->len, zc, &capped);
 	if (!(r >= 1.0) || t->half == 0)
 		return 0; /* nothing but the centre within reach */
 
 	const axis *ax = &ctx->ax;
-	double perp = (row + 0.5 - ax->c_perp) / ax->f_perp;
-	sss__blur1d b = {
-		.rgb = {pl->rgb[0] + base, pl->rgb[1] + base, pl->rgb[2] + base},
-		.z = pl->z + base,
-		.geo = {pl->geo[0] ? pl->geo[0] + base : NULL,
-		        pl->geo[1] ? pl->geo[1] + base : NULL,
-		        pl->geo[2] ? pl->geo[2] + base : NULL},
-		.slot = pl->slot + base, .i = i, .slot_c = slot, .zc = zc,
-		.readable = (int64_t)pl->len * (pl->rows - row),
-		.off_axis = (float)(0.5 - ax->c),
-		.ife = ax->ortho ? 0.0f : (float)(1.0 / ax->f),
-		.two_xt = (float)(2.0 * (ax->ortho ? 1.0 : zc) / ax->f),
-		.cz = ax->ortho ? 1.0f : (float)(1.0 + perp * perp),
-		.upp = (float)((ax->ortho ? 1.0 : zc) / ax->f),
-		.cut_q = t->cut_q,
-	};
+	sss__blur1d b = *row;
+	b.i = i;
+	b.slot_c = slot;
+	b.zc = zc;
+	b.cut_q = t->cut_q;
+	if (!ax->ortho) {
+		b.two_xt = zc * row->two_xt;
+		b.upp = zc * row->upp;
+	}
 	if (b.geo[0])
 		for (int c = 0; c < 3; c++)
 			b.gc[c] = b.geo[c][i];
@@ -312,8 +331,7 @@ static int blur_pixel(const pass_ctx *ctx, int32_t row, int32_t i,
 		blur_taps(&b, pl->len, n, at, r, wa);
 	}
 	for (int c = 0; c < 3; c++)
-		out[c] = b.wsum[c] > 0.0f ? b.acc[c] / b.wsum[c]
-		                          : pl->rgb[c][base + i];
+		out[c] = b.wsum[c] > 0.0f ? b.acc[c] / b.wsum[c] : row->rgb[c][i];
 	return 1;
 }
 
@@ -326,24 +344,26 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in, *out = &ctx->out;
 	int32_t w = job->width, h = job->height;
-	for (int32_t y = y0; y < y1; y++) {
-		for (int32_t x = 0; x < w; x++) {
-			size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
-			int16_t slot = job->slot[i];
-			for (int c = 0; c < 3; c++)
-				in->rgb[c][i] = slot >= 0 ? job->signal[3 * i + c] : 0.0f;
-			if (in->z != job->depth)
-				in->z[i] = job->depth[y * job->depth_stride +
-				                      (int64_t)x * job->depth_channels];
-			out->z[o] = in->z[i];
-			out->slot[o] = slot;
-			if (in->geo[0]) {
-				const float *p = job->position + y * job->position_stride +
-				                 (int64_t)x * job->position_channels;
+	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
+		int32_t ye = yb + BLOCK < y1 ? yb + BLOCK : y1;
+		for (int32_t x = 0; x < w; x++)
+			for (int32_t y = yb; y < ye; y++) {
+				size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
+				int16_t slot = job->slot[i];
 				for (int c = 0; c < 3; c++)
-					in->geo[c][i] = out->geo[c][o] = p[c];
+					in->rgb[c][i] = slot >= 0 ? job->signal[3 * i + c] : 0.0f;
+				if (in->z != job->depth)
+					in->z[i] = job->depth[y * job->depth_stride +
+					                      (int64_t)x * job->depth_channels];
+				out->z[o] = in->z[i];
+				out->slot[o] = slot;
+				if (in->geo[0]) {
+					const float *p = job->position + y * job->position_stride +
+					                 (int64_t)x * job->position_channels;
+					for (int c = 0; c < 3; c++)
+						in->geo[c][i] = out->geo[c][o] = p[c];
+				}
 			}
-		}
 	}
 }
 
@@ -355,16 +375,21 @@ static void first_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in, *out = &ctx->out;
 	int32_t w = job->width, h = job->height;
-	for (int32_t y = y0; y < y1; y++) {
-		for (int32_t x = 0; x < w; x++) {
-			size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
-			float b[3];
-			if (job->slot[i] < 0 || !blur_pixel(ctx, y, x, b))
+	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
+		int32_t ye = yb + BLOCK < y1 ? yb + BLOCK : y1;
+		sss__blur1d rows[BLOCK];
+		for (int32_t y = yb; y < ye; y++)
+			row_template(ctx, y, &rows[y - yb]);
+		for (int32_t x = 0; x < w; x++)
+			for (int32_t y = yb; y < ye; y++) {
+				size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
+				float b[3];
+				if (job->slot[i] < 0 || !blur_pixel(ctx, &rows[y - yb], x, b))
+					for (int c = 0; c < 3; c++)
+						b[c] = in->rgb[c][i];
 				for (int c = 0; c < 3; c++)
-					b[c] = in->rgb[c][i];
-			for (int c = 0; c < 3; c++)
-				out->rgb[c][o] = b[c];
-		}
+					out->rgb[c][o] = b[c];
+			}
 	}
 }
 
@@ -376,18 +401,23 @@ static void second_rows(void *vctx, int32_t x0, int32_t x1)
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in;
 	int32_t w = job->width, h = job->height;
-	for (int32_t x = x0; x < x1; x++) {
-		for (int32_t y = 0; y < h; y++) {
-			int16_t slot = in->slot[(size_t)x * h + y];
-			if (slot < 0)
-				continue;
-			float b[3];
-			if (!blur_pixel(ctx, x, y, b))
-				for (int c = 0; c < 3; c++)
-					b[c] = in->rgb[c][(size_t)x * h + y];
-			sss__blend_pixel(&job->kernels[slot], b,
-			                 job->signal + 3 * ((size_t)y * w + x));
-		}
+	for (int32_t xb = x0; xb < x1; xb += BLOCK) {
+		int32_t xe = xb + BLOCK < x1 ? xb + BLOCK : x1;
+		sss__blur1d rows[BLOCK];
+		for (int32_t x = xb; x < xe; x++)
+			row_template(ctx, x, &rows[x - xb]);
+		for (int32_t y = 0; y < h; y++)
+			for (int32_t x = xb; x < xe; x++) {
+				int16_t slot = in->slot[(size_t)x * h + y];
+				if (slot < 0)
+					continue;
+				float b[3];
+				if (!blur_pixel(ctx, &rows[x - xb], y, b))
+					for (int c = 0; c < 3; c++)
+						b[c] = in->rgb[c][(size_t)x * h + y];
+				sss__blend_pixel(&job->kernels[slot], b,
+				                 job->signal + 3 * ((size_t)y * w + x));
+			}
 	}
 }
 

@@ -6,10 +6,10 @@ set -u
 # renders real scenes; Debian's python3 with numpy, pytest and OpenImageIO
 # checks the results independently of the code under test. The comparison
 # (make compare) plots with matplotlib and renders EEVEE under Xvfb with
-# Mesa's software OpenGL.
+# Mesa's software OpenGL. make bench times oiiotool (openimageio-tools).
 PACKAGES="gcc make libc6-dev pkg-config binutils libpng-dev libopenexr-dev
 libcjson-dev blender python3 python3-numpy python3-pytest python3-openimageio
-valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri"
+valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri openimageio-tools"
 missing=""
 for p in $PACKAGES; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" \

@@ -1,0 +1,369 @@
+"""make bench: what the SSS post-process costs, measured side by side.
+
+    /usr/bin/python3 bench/run_bench.py [--out out/bench] [--build build]
+
+Runs build/sss-bench (one configuration per process, so that peak memory is
+per configuration) over image sizes, scattering coverage and projected
+kernel radii for every method; then, in the same run, the ratios that say
+whether the separable method is fast: one thread against all cores, the
+AVX2 loop against the scalar one, separable against the brute-force
+reference, separable against Blender's compositor Bilateral Blur node on
+the same image (when Blender is installed), and the `sss` command end to
+end against a plain read + write of the same EXR with oiiotool. Writes
+bench.csv (every run), bench.md (tables) and bench.png (plots) into --out
+and prints the tables.
+
+Timings are the best of a few runs on a machine that may be shared: read
+the ratios, which are measured minutes apart on the same machine.
+"""
+import argparse
+import csv
+import io
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+SIZES = [(960, 540), (1920, 1080), (3840, 2160)]
+COVERAGES = [0.1, 0.5, 1.0]
+RADII = [4, 16, 64]
+FIELDS = ["method", "width", "height", "rows", "coverage", "radius_px",
+          "threads", "simd", "seconds", "mpx_per_s", "ns_per_scattering_px",
+          "rss_inputs_mib", "rss_peak_mib"]
+
+
+def log(msg):
+    print(f"bench: {msg}", flush=True)
+
+
+class Bench:
+    def __init__(self, build):
+        self.exe = os.path.join(build, "sss-bench")
+        self.rows = []
+
+    def run(self, tag, size=(1920, 1080), coverage=1.0, radius=16,
+            method="separable", threads=0, scalar=False, repeat=2, rows=0,
+            dump=None):
+        cmd = [self.exe, "--size", str(size[0]), str(size[1]),
+               "--coverage", str(coverage), "--radius", str(radius),
+               "--method", method, "--threads", str(threads),
+               "--repeat", str(repeat)]
+        if scalar:
+            cmd.append("--scalar")
+        if rows:
+            cmd += ["--rows", str(rows)]
+        if dump:
+            cmd += ["--dump", dump]
+        out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+        row = dict(zip(FIELDS, next(csv.reader(io.StringIO(out.stdout)))))
+        row["tag"] = tag
+        for k in FIELDS[1:]:
+            if k != "simd":
+                row[k] = float(row[k])
+        self.rows.append(row)
+        return row
+
+
+def grid(b):
+    for size in SIZES:
+        for cov in COVERAGES:
+            for r in RADII:
+                row = b.run("grid", size, cov, r,
+                            repeat=1 if size[0] * size[1] > 4e6 else 2)
+                log(f"separable {size[0]}x{size[1]} coverage {cov:.0%} "
+                    f"radius {r:2d} px: {row['ns_per_scattering_px']:8.1f} ns "
+                    f"per scattering pixel, peak {row['rss_peak_mib']:.0f} MiB")
+    # The other methods on the small size: they are slower by design.
+    for method in ("separable-exact", "disk"):
+        for cov in (0.1, 1.0):
+            for r in RADII:
+                row = b.run("grid", SIZES[0], cov, r, method=method, repeat=1)
+                log(f"{method} {SIZES[0][0]}x{SIZES[0][1]} coverage {cov:.0%} "
+                    f"radius {r:2d} px: {row['ns_per_scattering_px']:8.1f} ns")
+    # The reference on a band of rows: its cost per pixel does not depend
+    # on how many rows there are, and a whole frame would take minutes.
+    for r in (4, 16):
+        row = b.run("grid", SIZES[0], 1.0, r, method="reference", repeat=1,
+                    rows=68 if r == 4 else 24)
+        log(f"reference {SIZES[0][0]}x{row['rows']:.0f} band radius {r:2d} px: "
+            f"{row['ns_per_scattering_px']:8.1f} ns")
+
+
+def ratios(b, results):
+    hd, cov, r = (1920, 1080), 1.0, 16
+    one = b.run("threads", hd, cov, r, threads=1, repeat=3)
+    every = b.run("threads", hd, cov, r, threads=0, repeat=3)
+    scalar = b.run("simd", hd, cov, r, threads=1, scalar=True, repeat=2)
+    ref = b.run("reference", hd, cov, r, threads=1, method="reference",
+                repeat=1, rows=34)
+    cores = os.cpu_count() or 1
+    per_core = hd[0] * hd[1] / one["seconds"] * 1e-6
+    results.update({
+        "cores": cores,
+        "separable_1080p_16px_1thread_s": one["seconds"],
+        "separable_1080p_16px_all_s": every["seconds"],
+        "mpx_per_s_per_core": per_core,
+        "thread_scaling": one["seconds"] / every["seconds"],
+        "simd_speedup": scalar["seconds"] / one["seconds"],
+        "vs_reference": ref["ns_per_scattering_px"] /
+                        one["ns_per_scattering_px"],
+        "peak_working_mib": every["rss_peak_mib"] - every["rss_inputs_mib"],
+        "two_rgb_images_mib": 2 * 3 * 4 * hd[0] * hd[1] / 2**20,
+    })
+    log(f"1080p, 100% coverage, 16 px, separable: {per_core:.2f} Mpx/s per "
+        f"core (1 thread), {cores} threads {results['thread_scaling']:.2f}x, "
+        f"AVX2 vs scalar {results['simd_speedup']:.2f}x, vs reference "
+        f"{results['vs_reference']:.0f}x")
+
+
+def write_exr(path, width, height, channels, compression="zip"):
+    """channels: list of (name, float32 array of height x width)."""
+    import OpenImageIO as oiio
+    spec = oiio.ImageSpec(width, height, len(channels), "float")
+    spec.channelnames = tuple(name for name, _ in channels)
+    spec.attribute("compression", compression)
+    data = np.stack([a for _, a in channels], axis=-1).astype(np.float32)
+    out = oiio.ImageOutput.create(path)
+    if not out or not out.open(path, spec) or not out.write_image(data):
+        raise RuntimeError(f"cannot write {path}: {oiio.geterror()}")
+    out.close()
+
+
+def frame_from_dump(prefix, width, height, path):
+    """A Blender-style multilayer frame (render-output naming, every pass
+    Cycles writes, float, ZIP) around the benchmark's light and depth."""
+    light = np.fromfile(prefix + "_light.f32", np.float32).reshape(height, width, 3)
+    depth = np.fromfile(prefix + "_depth.f32", np.float32).reshape(height, width)
+    index = np.fromfile(prefix + "_index.f32", np.float32).reshape(height, width)
+    rng = np.random.default_rng(1)
+    ch = [("ViewLayer.Combined." + c, light[..., i % 3] if c != "A"
+           else np.ones_like(depth)) for i, c in enumerate("RGBA")]
+    ch.append(("ViewLayer.Depth.Z", depth))
+    ch.append(("ViewLayer.IndexMA.X", index))
+    for name in ("DiffDir", "DiffInd", "DiffCol", "GlossDir", "GlossInd",
+                 "GlossCol", "TransDir", "TransInd", "TransCol", "Emit", "Env"):
+        for i, c in enumerate("RGB"):
+            if name == "DiffDir":
+                a = light[..., i]
+            elif name == "DiffCol":
+                a = np.full_like(depth, 0.8)
+            else:
+                a = (0.05 * rng.random((height, width))).astype(np.float32)
+            ch.append((f"ViewLayer.{name}.{c}", a))
+    write_exr(path, width, height, ch)
+    return len(ch)
+
+
+def best_of(cmd, repeat, parse=None):
+    best, text = float("inf"), ""
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+        t = time.perf_counter() - t0
+        if t < best:
+            best, text = t, out.stdout
+    return best, text
+
+
+def end_to_end(b, build, tmp, results):
+    hd = (1920, 1080)
+    prefix = os.path.join(tmp, "frame")
+    b.run("dump", hd, 1.0, 16, repeat=1, dump=prefix)
+    src = os.path.join(tmp, "frame.exr")
+    n = frame_from_dump(prefix, hd[0], hd[1], src)
+    size_mb = os.path.getsize(src) / 1e6
+    sss = [os.path.join(build, "sss"), src, "-o", os.path.join(tmp, "sss.exr"),
+           "--scene", prefix + "_scene.json", "--threads", "0"]
+    t_sss, text = best_of(sss, 2)
+    m = re.search(r"read ([\d.]+) s, sss ([\d.]+) s, write ([\d.]+) s", text)
+    results.update({"exr_channels": n, "exr_mb": size_mb,
+                    "sss_end_to_end_s": t_sss})
+    if m:
+        results.update({"sss_read_s": float(m.group(1)),
+                        "sss_sss_s": float(m.group(2)),
+                        "sss_write_s": float(m.group(3))})
+    oiiotool = shutil.which("oiiotool")
+    if oiiotool:
+        t_io, _ = best_of([oiiotool, src, "-o", os.path.join(tmp, "io.exr")], 2)
+        results["oiiotool_read_write_s"] = t_io
+        results["end_to_end_vs_io"] = t_sss / t_io
+        log(f"1080p ZIP frame ({n} channels, {size_mb:.0f} MB): sss end to end "
+            f"{t_sss:.2f} s (read {results.get('sss_read_s', 0):.2f}, sss "
+            f"{results.get('sss_sss_s', 0):.2f}, write "
+            f"{results.get('sss_write_s', 0):.2f}), oiiotool read+write "
+            f"{t_io:.2f} s: {t_sss / t_io:.2f}x")
+    else:
+        log("oiiotool not found: end-to-end ratio skipped")
+
+
+def bilateral(b, tmp, results):
+    blender = shutil.which("blender")
+    if not blender:
+        log("Blender not found: Bilateral Blur comparison skipped")
+        return
+    size, r = (640, 360), 16
+    prefix = os.path.join(tmp, "small")
+    ours = b.run("bilateral", size, 1.0, r, threads=0, repeat=3, dump=prefix)
+    light = np.fromfile(prefix + "_light.f32", np.float32).reshape(size[1], size[0], 3)
+    depth = np.fromfile(prefix + "_depth.f32", np.float32).reshape(size[1], size[0])
+    lp, dp = os.path.join(tmp, "light.exr"), os.path.join(tmp, "depth.exr")
+    write_exr(lp, size[0], size[1], [(c, light[..., i]) for i, c in enumerate("RGB")])
+    write_exr(dp, size[0], size[1], [("R", depth), ("G", depth), ("B", depth)])
+    out = subprocess.run(
+        [blender, "-b", "--factory-startup", "--python-exit-code", "1",
+         "--python", os.path.join(HERE, "blender_bilateral.py"), "--",
+         "--light", lp, "--depth", dp, "--sigma-space", str(r), "--repeat", "1"],
+        check=True, capture_output=True, text=True)
+    m = re.search(r"bilateral_seconds=([\d.]+) baseline_seconds=([\d.]+)",
+                  out.stdout)
+    if not m:
+        raise RuntimeError("blender_bilateral.py printed no timing:\n" + out.stdout[-2000:])
+    node = float(m.group(1)) - float(m.group(2))
+    results.update({"bilateral_s": node, "bilateral_size": f"{size[0]}x{size[1]}",
+                    "separable_same_image_s": ours["seconds"],
+                    "vs_bilateral": node / ours["seconds"]})
+    log(f"{size[0]}x{size[1]}, 16 px: Blender Bilateral Blur {node:.2f} s, "
+        f"separable {ours['seconds']:.3f} s: {node / ours['seconds']:.0f}x")
+
+
+def real_render(build, tmp, results):
+    blender = shutil.which("blender")
+    if not blender:
+        return
+    out_dir = os.path.join(tmp, "render")
+    subprocess.run(
+        [blender, "-b", "--factory-startup", "--python-exit-code", "1",
+         "--python", os.path.join(ROOT, "blender_scripts", "make_test_scene.py"),
+         "--", "--out", out_dir, "--size", "512", "--samples", "2"],
+        check=True, capture_output=True, text=True)
+    cmd = [os.path.join(build, "sss"), os.path.join(out_dir, "render.exr"), "-o",
+           os.path.join(tmp, "render_sss.exr"), "--scene",
+           os.path.join(out_dir, "scene.json"), "--threads", "0"]
+    t, text = best_of(cmd, 2)
+    m = re.search(r"read ([\d.]+) s, sss ([\d.]+) s, write ([\d.]+) s", text)
+    results["blender_512_end_to_end_s"] = t
+    if m:
+        results["blender_512_sss_s"] = float(m.group(2))
+    log(f"Blender render 512x512 (Cycles test scene): sss end to end {t:.2f} s"
+        + (f", of which SSS {float(m.group(2)):.3f} s" if m else ""))
+
+
+def plot(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(13, 5))
+    grid_rows = [r for r in rows if r["tag"] == "grid"]
+    styles = {0.1: ":", 0.5: "--", 1.0: "-"}
+    colours = {"separable": "C0", "separable-exact": "C1", "disk": "C2",
+               "reference": "C3"}
+    for method in colours:
+        for cov in COVERAGES:
+            pts = sorted((r["radius_px"], r["ns_per_scattering_px"])
+                         for r in grid_rows if r["method"] == method and
+                         abs(r["coverage"] - cov) < 0.06 and
+                         (method != "separable" or r["width"] == 1920))
+            if method == "reference":
+                pts = sorted((r["radius_px"], r["ns_per_scattering_px"])
+                             for r in grid_rows if r["method"] == method)
+                if cov != 1.0:
+                    continue
+            if pts:
+                ax[0].plot(*zip(*pts), styles.get(cov, "-"), marker="o",
+                           color=colours[method],
+                           label=f"{method}, {cov:.0%} coverage"
+                           if method != "reference" else "reference (band)")
+    ax[0].set(xscale="log", yscale="log", xlabel="projected kernel radius (px)",
+              ylabel="ns per scattering pixel (all cores)",
+              title="Cost per scattering pixel: method, radius, coverage")
+    ax[0].set_xticks(RADII, [str(r) for r in RADII])
+    ax[0].legend(fontsize=7)
+    for r_px, colour in zip(RADII, ("C0", "C1", "C2")):
+        for cov in COVERAGES:
+            pts = sorted((r["width"] * r["height"] / 1e6, r["ns_per_scattering_px"])
+                         for r in grid_rows if r["method"] == "separable" and
+                         r["radius_px"] == r_px and abs(r["coverage"] - cov) < 0.06)
+            if pts:
+                ax[1].plot(*zip(*pts), styles[cov], marker="o", color=colour,
+                           label=f"{r_px} px, {cov:.0%}")
+    ax[1].set(xscale="log", yscale="log", xlabel="image size (megapixels)",
+              ylabel="ns per scattering pixel (all cores)",
+              title="separable: flat in image size and coverage?")
+    ax[1].legend(fontsize=7, ncol=3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def markdown(rows, results):
+    out = ["# make bench", "",
+           f"Machine: {results['cores']} cores. Times are the best of 1-3 runs; "
+           "ns per scattering pixel with all cores unless noted.", "",
+           "## Targets (1920x1080, 100% coverage, 16 px, separable)", "",
+           "| measure | value | target |", "|---|---|---|",
+           f"| Mpx/s per core (1 thread) | {results['mpx_per_s_per_core']:.2f} | >= 25 |",
+           f"| thread scaling, {results['cores']} threads | "
+           f"{results['thread_scaling']:.2f}x | >= 1.8x on 2 cores |",
+           f"| AVX2 vs scalar loop (1 thread) | {results['simd_speedup']:.2f}x | |",
+           f"| vs reference (per pixel, 1 thread) | {results['vs_reference']:.0f}x | >= 30x |"]
+    if "vs_bilateral" in results:
+        out.append(f"| vs Blender Bilateral Blur ({results['bilateral_size']}, "
+                   f"all cores) | {results['vs_bilateral']:.0f}x | >= 5x |")
+    if "end_to_end_vs_io" in results:
+        out.append(f"| sss end to end vs oiiotool read+write (1080p ZIP, "
+                   f"{results['exr_channels']} channels) | "
+                   f"{results['end_to_end_vs_io']:.2f}x | <= 1.5x |")
+    out.append(f"| peak working memory beyond the inputs | "
+               f"{results['peak_working_mib']:.0f} MiB | two RGB float images "
+               f"= {results['two_rgb_images_mib']:.0f} MiB |")
+    out += ["", "## Every run", "",
+            "| tag | method | size | coverage | radius | threads | simd | s | "
+            "ns/scattering px | peak MiB |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append(f"| {r['tag']} | {r['method']} | {r['width']:.0f}x{r['rows']:.0f} | "
+                   f"{r['coverage']:.2f} | {r['radius_px']:.0f} | {r['threads']:.0f} | "
+                   f"{r['simd']} | {r['seconds']:.4f} | {r['ns_per_scattering_px']:.1f} | "
+                   f"{r['rss_peak_mib']:.0f} |")
+    out += ["", "## Other figures", ""]
+    out += [f"- {k}: {v:.4g}" if isinstance(v, float) else f"- {k}: {v}"
+            for k, v in results.items()]
+    return "\n".join(out) + "\n"
+
+
+def main():
+    p = argparse.ArgumentParser(prog="run_bench.py")
+    p.add_argument("--out", default=os.path.join(ROOT, "out", "bench"))
+    p.add_argument("--build", default=os.path.join(ROOT, "build"))
+    args = p.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    b = Bench(args.build)
+    results = {}
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="sss-bench-") as tmp:
+        ratios(b, results)
+        grid(b)
+        end_to_end(b, args.build, tmp, results)
+        bilateral(b, tmp, results)
+        real_render(args.build, tmp, results)
+    with open(os.path.join(args.out, "bench.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["tag"] + FIELDS)
+        w.writeheader()
+        w.writerows(b.rows)
+    md = markdown(b.rows, results)
+    with open(os.path.join(args.out, "bench.md"), "w") as f:
+        f.write(md)
+    plot(b.rows, os.path.join(args.out, "bench.png"))
+    print(md.split("## Every run")[0])
+    log(f"wrote {args.out}/bench.csv, bench.md, bench.png "
+        f"({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
