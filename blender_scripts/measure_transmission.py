@@ -49,6 +49,10 @@ def parse_args():
     p.add_argument("--resolution", default="160x120")
     p.add_argument("--rw-samples", type=int, default=512)
     p.add_argument("--samples", type=int, default=64)
+    p.add_argument("--model", default="BURLEY",
+                   help="transmission model for materials that have it off "
+                   "(the add-on's default): BURLEY, JIMENEZ, BEER_LAMBERT, "
+                   "FAST")
     a = p.parse_args(argv)
     a.resolution = tuple(int(v) for v in a.resolution.lower().split("x"))
     return a
@@ -119,6 +123,9 @@ def main():
     scene = open_scene(args)
     scene.cycles.samples = args.samples
     found = pipeline.analyse(scene)
+    for f in found.found:
+        if f.material.sss.transmission == "OFF":
+            f.material.sss.transmission = args.model
     need, why = transmission.wanted(scene, found)
     times = {}
     inp = os.path.join(work, "passes.exr")

@@ -119,7 +119,7 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
     taps: IntProperty(name="Taps", min=0, max=4097, default=0,
                       description="Taps per 1-D pass, 0 = the scene's")
     transmission: EnumProperty(
-        name="Transmission", items=TRANSMISSION, default="BURLEY",
+        name="Transmission", items=TRANSMISSION, default="OFF",
         description="Light through thin parts lit from behind (ears, "
         "fingers, jade, wax, leaves)")
     transmission_strength: FloatProperty(

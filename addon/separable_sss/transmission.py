@@ -43,7 +43,9 @@ BEHIND_COS = math.cos(math.radians(75.0))
 WORLD_THRESHOLD = 0.1
 # Render cost of the layer, measured on the head scene (make compare's
 # first scene, 160x120, CPU): see README, Back-lit transmission.
-COST_NOTE = "about +30 % render time at a quarter of the samples"
+COST_NOTE = ("measured on the head scene: the layer at a quarter of the "
+             "samples adds 1 to 2 times the render time (every surface is "
+             "a white translucent there, so its paths bounce long)")
 
 MODELS = {"OFF": "off", "BURLEY": "burley", "JIMENEZ": "jimenez",
           "BEER_LAMBERT": "beer-lambert", "FAST": "fast"}

@@ -35,6 +35,7 @@ def open_scene(path, out_dir):
     scene = bpy.context.scene
     scene.sss.output_dir = str(out_dir)
     scene.cycles.sample_clamp_indirect = 10.0
+    bpy.data.materials["Skin"].sss.transmission = "BURLEY"  # off by default
     return scene
 
 
