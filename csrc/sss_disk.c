@@ -119,8 +119,18 @@ static void lateral(const sss__job *job, int32_t x, int32_t y, double z,
 	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
 }
 
+/* The radii and their pdf for one (kernel, sample count, mass within
+ * reach): a pure function of those three, kept while neighbouring pixels
+ * share them, so caching changes no result. */
+typedef struct radii {
+	int16_t slot;
+	int32_t n;
+	double mass;
+	double r[4096], pdf[4096];
+} radii;
+
 static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
-                       int32_t y, float *out)
+                       int32_t y, radii *cache, float *out)
 {
 	const sss__job *job = ctx->job;
 	const sss__kernel *k = &job->kernels[slot];
@@ -151,12 +161,21 @@ static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
 	double centre[3], lc[2];
 	sss__pixel_position(job, x, y, centre);
 	lateral(job, x, y, z, lc);
+	if (cache->slot != slot || cache->n != n || cache->mass != mass) {
+		for (int32_t i = 0; i < n; i++) {
+			double r = inverse_lookup(cdf, k->support, (i + 0.5) / n * mass);
+			cache->r[i] = r;
+			cache->pdf[i] = sss__table_lookup(k->area[sc], r, inv_support);
+		}
+		cache->slot = slot;
+		cache->n = n;
+		cache->mass = mass;
+	}
 	double rot = 2.0 * SSS__PI * rotation(x, y);
 	double cr = cos(rot), sr = sin(rot);
 	double acc[3] = {0, 0, 0}, wsum[3] = {0, 0, 0};
 	for (int32_t i = 0; i < n; i++) {
-		double r = inverse_lookup(cdf, k->support, (i + 0.5) / n * mass);
-		double pdf = sss__table_lookup(k->area[sc], r, inv_support);
+		double r = cache->r[i], pdf = cache->pdf[i];
 		if (!(pdf > 0.0))
 			continue;
 		/* cos, sin of 2 pi frac(i / golden) + rot */
@@ -202,12 +221,16 @@ static void disk_rows(void *vctx, int32_t y0, int32_t y1)
 {
 	const disk_ctx *ctx = vctx;
 	const sss__job *job = ctx->job;
+	radii cache;
+	cache.slot = -1;
+	cache.n = 0;
+	cache.mass = 0.0;
 	for (int32_t y = y0; y < y1; y++)
 		for (int32_t x = 0; x < job->width; x++) {
 			int64_t i = (int64_t)y * job->width + x;
 			int16_t slot = job->slot[i];
 			if (slot >= 0)
-				disk_pixel(ctx, slot, x, y, job->scratch + 3 * i);
+				disk_pixel(ctx, slot, x, y, &cache, job->scratch + 3 * i);
 		}
 }
 
