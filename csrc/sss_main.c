@@ -33,7 +33,7 @@ static const char usage_text[] =
 "  -f, --frames LIST       frames for #### patterns: 1-240, 1-240x2, 7,9,12-20\n"
 "  -m, --method NAME       separable (default: fast), separable-exact (two\n"
 "                          passes per Gaussian lobe: exact for Gaussian sums,\n"
-"                          Burley fitted; 10-15x separable's time), disk\n"
+"                          Burley fitted; 15-25x separable's time), disk\n"
 "                          (stochastic samples; grainy at low --samples) or\n"
 "                          reference (brute force: slow, exact)\n"
 "      --samples N         disk method: most samples per pixel, 1..4096\n"
