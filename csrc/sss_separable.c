@@ -335,9 +335,8 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 	return 1;
 }
 
-/* Rows y0..y1 of both planes from the job: planar light (0 where nothing
- * scatters, so that every sample read is finite), depth and positions, and
- * their transposes for the second pass. */
+/* Rows y0..y1 of both planes from the job, scattering pixels only: planar
+ * light, depth and positions, and their transposes for the second pass. */
 static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 {
 	const pass_ctx *ctx = vctx;
@@ -350,8 +349,10 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 			for (int32_t y = yb; y < ye; y++) {
 				size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
 				int16_t slot = job->slot[i];
+				if (slot < 0)
+					continue;
 				for (int c = 0; c < 3; c++)
-					in->rgb[c][i] = slot >= 0 ? job->signal[3 * i + c] : 0.0f;
+					in->rgb[c][i] = job->signal[3 * i + c];
 				if (in->z != job->depth)
 					in->z[i] = job->depth[y * job->depth_stride +
 					                      (int64_t)x * job->depth_channels];
@@ -384,7 +385,9 @@ static void first_rows(void *vctx, int32_t y0, int32_t y1)
 			for (int32_t y = yb; y < ye; y++) {
 				size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
 				float b[3];
-				if (job->slot[i] < 0 || !blur_pixel(ctx, &rows[y - yb], x, b))
+				if (job->slot[i] < 0)
+					continue;
+				if (!blur_pixel(ctx, &rows[y - yb], x, b))
 					for (int c = 0; c < 3; c++)
 						b[c] = in->rgb[c][i];
 				for (int c = 0; c < 3; c++)
@@ -467,25 +470,31 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	sss_result r = SSS_ERR_OUT_OF_MEMORY;
 	int geo = job->position != NULL;
 	int copy_z = !(job->depth_channels == 1 && job->depth_stride == w);
+	/* Both planes start as zeros (calloc: pages nobody touches cost
+	 * nothing) and only scattering pixels are written: the work and the
+	 * memory follow the coverage. A sample on another material is masked
+	 * off, but must be finite: 0 is. */
 	table *tables = calloc((size_t)count, sizeof *tables);
-	plane hp = {w, h, {job->scratch, job->scratch + npix,
-	                   job->scratch + 2 * npix}, NULL, {NULL}, NULL};
+	plane hp = {w, h, {NULL}, NULL, {NULL}, NULL};
 	plane vp = {h, w, {NULL}, NULL, {NULL}, NULL};
-	float *vbuf = malloc(npix * (geo ? 7 : 4) * sizeof *vbuf);
-	float *hbuf = copy_z || geo ? malloc(npix * (geo ? 4 : 1) * sizeof *hbuf)
-	                            : NULL;
+	size_t hn = 3 + (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 7 : 4;
+	float *hbuf = calloc(npix * hn, sizeof *hbuf);
+	float *vbuf = calloc(npix * vn, sizeof *vbuf);
 	int16_t *vslot = malloc(npix * sizeof *vslot);
-	if (!tables || !vbuf || !vslot || ((copy_z || geo) && !hbuf))
+	if (!tables || !hbuf || !vbuf || !vslot)
 		goto done;
-	for (int c = 0; c < 3; c++)
+	memset(vslot, 0xff, npix * sizeof *vslot); /* -1: does not scatter */
+	for (int c = 0; c < 3; c++) {
+		hp.rgb[c] = hbuf + c * npix;
 		vp.rgb[c] = vbuf + c * npix;
+	}
 	vp.z = vbuf + 3 * npix;
 	vp.slot = vslot;
 	hp.slot = (int16_t *)job->slot;
-	hp.z = copy_z ? hbuf : (float *)job->depth;
+	hp.z = copy_z ? hbuf + 3 * npix : (float *)job->depth;
 	if (geo)
 		for (int c = 0; c < 3; c++) {
-			hp.geo[c] = hbuf + (1 + c) * npix;
+			hp.geo[c] = hbuf + (3 + (size_t)copy_z + c) * npix;
 			vp.geo[c] = vbuf + (4 + c) * npix;
 		}
 
