@@ -34,3 +34,24 @@ void sss__blur1d_scalar(sss__blur1d *b)
 		b->wsum[c] = lane_sum(ws[c]);
 	}
 }
+
+void sss__blur1d_samples_scalar(sss__blur1d *b, const sss__samples *l)
+{
+	float acc[3][SSS__LANES] = {{0}}, ws[3][SSS__LANES] = {{0}};
+	for (int32_t k = 0; k < l->count; k++) {
+		int lane = (int)(k % SSS__LANES);
+		int32_t s = l->s[k], j = b->i + s;
+		float q = sss__blur1d_q(b, j, s);
+		int valid = q < b->cut_q;
+		for (int c = 0; c < 3; c++) {
+			float w = valid ? l->w[c][k] : 0.0f;
+			float wgt = w * sss__blur1d_rho(q, l->a8[c][k]);
+			acc[c][lane] += wgt * b->rgb[c][j];
+			ws[c][lane] += wgt;
+		}
+	}
+	for (int c = 0; c < 3; c++) {
+		b->acc[c] = lane_sum(acc[c]);
+		b->wsum[c] = lane_sum(ws[c]);
+	}
+}

@@ -89,7 +89,21 @@ static inline float sss__blur1d_rho(float q, float a8)
 	return t4 * t4;
 }
 
+/* Samples anywhere along the row (sparse layouts: each tap reads the two
+ * pixels around it): sample k is pixel i + s[k] with weights w_c[k] (the
+ * tap's W times the pixel's share of it) and A_c/8 in a8_c[k]. Only
+ * samples on the centre's material are listed; the arrays are padded with
+ * zero weights (s = 0) to a multiple of SSS__LANES. The row fields of the
+ * sss__blur1d are used, not the table rows. */
+typedef struct sss__samples {
+	int32_t count;         /* a multiple of SSS__LANES */
+	int32_t *s;
+	float *w[3], *a8[3];
+} sss__samples;
+
 void sss__blur1d_scalar(sss__blur1d *b);
+void sss__blur1d_samples_scalar(sss__blur1d *b, const sss__samples *l);
+void sss__blur1d_samples_avx2(sss__blur1d *b, const sss__samples *l);
 /* Same result, AVX2; only call when sss__blur1d_avx2_supported(). */
 void sss__blur1d_avx2(sss__blur1d *b);
 int sss__blur1d_avx2_supported(void);

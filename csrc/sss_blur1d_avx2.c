@@ -140,6 +140,64 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 	b->wsum[2] = lane_sum(ws2);
 }
 
+/* Sparse samples: the same arithmetic on gathered pixels. */
+AVX2 void sss__blur1d_samples_avx2(sss__blur1d *b, const sss__samples *l)
+{
+	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+	const __m256 cut = _mm256_set1_ps(b->cut_q);
+	const __m256i centre = _mm256_set1_epi32(b->i);
+	const __m256 zc = _mm256_set1_ps(b->zc), off = _mm256_set1_ps(b->off_axis);
+	const __m256 ife = _mm256_set1_ps(b->ife), two_xt = _mm256_set1_ps(b->two_xt);
+	const __m256 cz = _mm256_set1_ps(b->cz), upp = _mm256_set1_ps(b->upp);
+	const int geo = b->geo[0] != NULL;
+	__m256 acc[3] = {zero, zero, zero}, ws[3] = {zero, zero, zero};
+	for (int32_t k = 0; k < l->count; k += SSS__LANES) {
+		__m256i s = _mm256_loadu_si256((const __m256i *)(const void *)(l->s + k));
+		__m256i j = _mm256_add_epi32(centre, s);
+		__m256 sf = _mm256_cvtepi32_ps(s);
+		__m256 q;
+		if (geo) {
+			__m256 dx = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[0], j, 4),
+			                          _mm256_set1_ps(b->gc[0]));
+			__m256 dy = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[1], j, 4),
+			                          _mm256_set1_ps(b->gc[1]));
+			__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[2], j, 4),
+			                          _mm256_set1_ps(b->gc[2]));
+			__m256 xt = _mm256_mul_ps(sf, upp);
+			q = _mm256_sub_ps(
+				_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),
+				                            _mm256_mul_ps(dy, dy)),
+				              _mm256_mul_ps(dz, dz)),
+				_mm256_mul_ps(xt, xt));
+		} else {
+			__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->z, j, 4), zc);
+			__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(j), off);
+			__m256 e = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);
+			__m256 xt2 = _mm256_mul_ps(sf, two_xt);
+			q = _mm256_add_ps(_mm256_mul_ps(e, _mm256_add_ps(e, xt2)),
+			                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));
+		}
+		q = _mm256_max_ps(q, zero);
+		__m256 valid = _mm256_cmp_ps(q, cut, _CMP_LT_OQ);
+		for (int c = 0; c < 3; c++) {
+			__m256 w = _mm256_and_ps(_mm256_loadu_ps(l->w[c] + k), valid);
+			__m256 a = _mm256_loadu_ps(l->a8[c] + k);
+			__m256 t = _mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(q, a)),
+			                         zero);
+			__m256 t2 = _mm256_mul_ps(t, t);
+			__m256 t4 = _mm256_mul_ps(t2, t2);
+			__m256 wgt = _mm256_mul_ps(w, _mm256_mul_ps(t4, t4));
+			acc[c] = _mm256_add_ps(acc[c], _mm256_mul_ps(wgt,
+				_mm256_i32gather_ps(b->rgb[c], j, 4)));
+			ws[c] = _mm256_add_ps(ws[c], wgt);
+		}
+	}
+	for (int c = 0; c < 3; c++) {
+		b->acc[c] = lane_sum(acc[c]);
+		b->wsum[c] = lane_sum(ws[c]);
+	}
+}
+
 #else
 
 int sss__blur1d_avx2_supported(void)
@@ -150,6 +208,11 @@ int sss__blur1d_avx2_supported(void)
 void sss__blur1d_avx2(sss__blur1d *b)
 {
 	sss__blur1d_scalar(b);
+}
+
+void sss__blur1d_samples_avx2(sss__blur1d *b, const sss__samples *l)
+{
+	sss__blur1d_samples_scalar(b, l);
 }
 
 #endif

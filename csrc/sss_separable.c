@@ -22,6 +22,7 @@
 #include "sss_internal.h"
 #include "sss_blur1d.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -192,6 +193,8 @@ typedef struct pass_ctx {
 	axis ax;
 	int first;
 	int avx2;
+	int32_t half_max;      /* largest tap count right of the centre */
+	atomic_int *failed;    /* a band could not allocate its scratch */
 } pass_ctx;
 
 /* Half-width in pixels of kernel k at depth z along the axis, and whether
@@ -208,12 +211,41 @@ static double half_width(const sss__job *job, const sss__kernel *k,
 	return r;
 }
 
-/* Sparse and per-pixel layouts: each tap reads the two pixels around it
- * with linear interpolation. */
-static void blur_taps(sss__blur1d *b, int32_t len, int32_t n,
-                      const float *at, double r, const float *wa)
+/* Per band of rows: room for one pixel's per-pixel taps and its list of
+ * sparse samples (four per tap: two pixels on either side, plus padding). */
+typedef struct scratch {
+	sss__tap *tap;
+	float *at, *wa;
+	sss__samples list;
+} scratch;
+
+static void *scratch_new(scratch *sc, int32_t half)
 {
-	double acc[3] = {0, 0, 0}, ws[3] = {0, 0, 0};
+	size_t taps = (size_t)half + 1, n = 4 * taps + SSS__LANES;
+	char *m = malloc(taps * sizeof *sc->tap +
+	                 taps * (1 + PARAMS) * sizeof(float) +
+	                 n * (sizeof(int32_t) + 6 * sizeof(float)));
+	if (!m)
+		return NULL;
+	sc->tap = (sss__tap *)(void *)m;
+	sc->at = (float *)(void *)(sc->tap + taps);
+	sc->wa = sc->at + taps;
+	float *f = sc->wa + taps * PARAMS;
+	for (int c = 0; c < 3; c++) {
+		sc->list.w[c] = f + c * n;
+		sc->list.a8[c] = f + (3 + c) * n;
+	}
+	sc->list.s = (int32_t *)(void *)(f + 6 * n);
+	return m;
+}
+
+/* The samples of taps 0..n at offsets at[t] r: the two pixels around each
+ * tap, by linear interpolation, where they are on the centre's material. */
+static void list_samples(const sss__blur1d *b, int32_t len, int32_t n,
+                         const float *at, double r, const float *wa,
+                         sss__samples *l)
+{
+	int32_t m = 0;
 	for (int32_t t = 0; t <= n; t++) {
 		const float *p = wa + (size_t)t * PARAMS;
 		for (int sign = -1; sign <= (t ? 1 : -1); sign += 2) {
@@ -226,21 +258,21 @@ static void blur_taps(sss__blur1d *b, int32_t len, int32_t n,
 				if (share <= 0.0 || j < 0 || j >= len ||
 				    b->slot[j] != b->slot_c)
 					continue;
-				float q = sss__blur1d_q(b, j, j - b->i);
-				if (!(q < b->cut_q))
-					continue;
+				l->s[m] = j - b->i;
 				for (int c = 0; c < 3; c++) {
-					double w = share * p[c] * sss__blur1d_rho(q, p[3 + c]);
-					acc[c] += w * b->rgb[c][j];
-					ws[c] += w;
+					l->w[c][m] = (float)(share * p[c]);
+					l->a8[c][m] = p[3 + c];
 				}
+				m++;
 			}
 		}
 	}
-	for (int c = 0; c < 3; c++) {
-		b->acc[c] = (float)acc[c];
-		b->wsum[c] = (float)ws[c];
+	for (; m % SSS__LANES; m++) {
+		l->s[m] = 0;
+		for (int c = 0; c < 3; c++)
+			l->w[c][m] = l->a8[c][m] = 0.0f;
 	}
+	l->count = m;
 }
 
 /* What every pixel of row `row` of ctx->in shares; for a perspective
@@ -269,7 +301,7 @@ static void row_template(const pass_ctx *ctx, int32_t row, sss__blur1d *b)
 /* The 1-D blur of row `row` of ctx->in at pixel i into out; 0 if it is
  * the identity there (kernel narrower than a pixel at this depth). */
 static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
-                      int32_t i, float out[3])
+                      int32_t i, scratch *sc, float out[3])
 {
 	const sss__job *job = ctx->job;
 	const plane *pl = &ctx->in;
@@ -312,23 +344,28 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 			sss__blur1d_avx2(&b);
 		else
 			sss__blur1d_scalar(&b);
-	} else if (!capped && r >= t->half + 0.5) {
-		blur_taps(&b, pl->len, t->half, t->sparse_at, r, t->sparse_w);
 	} else {
-		/* Weights for this pixel alone: a limit cut the kernel, or the
-		 * tap budget is too large to tabulate. */
-		sss__tap tap[SSS__MAX_HALF_TAPS + 1];
-		float at[SSS__MAX_HALF_TAPS + 1];
-		float wa[(SSS__MAX_HALF_TAPS + 1) * PARAMS];
-		double ppu = ax->ortho ? ax->f : ax->f / zc;
-		int32_t n = sss__tap_layout(k->taps, r, tap);
-		for (int32_t s = 0; s <= n; s++) {
-			at[s] = (float)(tap[s].offset / r);
-			tap_weights(k, tap[s].offset, tap[s].offset - tap[s].lo,
-			            tap[s].hi - tap[s].offset, 1.0 / ppu,
-			            wa + (size_t)s * PARAMS, wa + (size_t)s * PARAMS + 3);
+		if (!capped && r >= t->half + 0.5) {
+			list_samples(&b, pl->len, t->half, t->sparse_at, r, t->sparse_w,
+			             &sc->list);
+		} else {
+			/* Weights for this pixel alone: a limit cut the kernel, or
+			 * the tap budget is too large to tabulate. */
+			double ppu = ax->ortho ? ax->f : ax->f / zc;
+			int32_t n = sss__tap_layout(k->taps, r, sc->tap);
+			for (int32_t s = 0; s <= n; s++) {
+				const sss__tap *tp = &sc->tap[s];
+				float *p = sc->wa + (size_t)s * PARAMS;
+				sc->at[s] = (float)(tp->offset / r);
+				tap_weights(k, tp->offset, tp->offset - tp->lo,
+				            tp->hi - tp->offset, 1.0 / ppu, p, p + 3);
+			}
+			list_samples(&b, pl->len, n, sc->at, r, sc->wa, &sc->list);
 		}
-		blur_taps(&b, pl->len, n, at, r, wa);
+		if (ctx->avx2)
+			sss__blur1d_samples_avx2(&b, &sc->list);
+		else
+			sss__blur1d_samples_scalar(&b, &sc->list);
 	}
 	for (int c = 0; c < 3; c++)
 		out[c] = b.wsum[c] > 0.0f ? b.acc[c] / b.wsum[c] : row->rgb[c][i];
@@ -376,6 +413,12 @@ static void first_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in, *out = &ctx->out;
 	int32_t w = job->width, h = job->height;
+	scratch sc;
+	void *mem = scratch_new(&sc, ctx->half_max);
+	if (!mem) {
+		atomic_store(ctx->failed, 1);
+		return;
+	}
 	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
 		int32_t ye = yb + BLOCK < y1 ? yb + BLOCK : y1;
 		sss__blur1d rows[BLOCK];
@@ -387,13 +430,14 @@ static void first_rows(void *vctx, int32_t y0, int32_t y1)
 				float b[3];
 				if (job->slot[i] < 0)
 					continue;
-				if (!blur_pixel(ctx, &rows[y - yb], x, b))
+				if (!blur_pixel(ctx, &rows[y - yb], x, &sc, b))
 					for (int c = 0; c < 3; c++)
 						b[c] = in->rgb[c][i];
 				for (int c = 0; c < 3; c++)
 					out->rgb[c][o] = b[c];
 			}
 	}
+	free(mem);
 }
 
 /* Second pass, image columns x0..x1 (rows of the transposed plane): blurs
@@ -404,6 +448,12 @@ static void second_rows(void *vctx, int32_t x0, int32_t x1)
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in;
 	int32_t w = job->width, h = job->height;
+	scratch sc;
+	void *mem = scratch_new(&sc, ctx->half_max);
+	if (!mem) {
+		atomic_store(ctx->failed, 1);
+		return;
+	}
 	for (int32_t xb = x0; xb < x1; xb += BLOCK) {
 		int32_t xe = xb + BLOCK < x1 ? xb + BLOCK : x1;
 		sss__blur1d rows[BLOCK];
@@ -415,13 +465,14 @@ static void second_rows(void *vctx, int32_t x0, int32_t x1)
 				if (slot < 0)
 					continue;
 				float b[3];
-				if (!blur_pixel(ctx, &rows[x - xb], y, b))
+				if (!blur_pixel(ctx, &rows[x - xb], y, &sc, b))
 					for (int c = 0; c < 3; c++)
 						b[c] = in->rgb[c][(size_t)x * h + y];
 				sss__blend_pixel(&job->kernels[slot], b,
 				                 job->signal + 3 * ((size_t)y * w + x));
 			}
 	}
+	free(mem);
 }
 
 /* The half-widths that dense rows must cover, per kernel, both axes. */
@@ -507,12 +558,18 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	const char *simd = getenv("SSS_SIMD");
 	int avx2 = !(simd && strcmp(simd, "scalar") == 0) &&
 	           sss__blur1d_avx2_supported();
-	pass_ctx first = {job, tables, hp, vp, ax[0], 1, avx2};
+	int32_t half_max = 0;
+	for (int32_t m = 0; m < count; m++)
+		if (tables[m].half > half_max)
+			half_max = tables[m].half;
+	atomic_int failed = 0;
+	pass_ctx first = {job, tables, hp, vp, ax[0], 1, avx2, half_max, &failed};
 	sss__parallel_rows(h, num_threads, fill_rows, &first);
 	sss__parallel_rows(h, num_threads, first_rows, &first);
-	pass_ctx second = {job, tables, vp, hp, ax[1], 0, avx2};
-	sss__parallel_rows(w, num_threads, second_rows, &second);
-	r = SSS_OK;
+	pass_ctx second = {job, tables, vp, hp, ax[1], 0, avx2, half_max, &failed};
+	if (!atomic_load(&failed))
+		sss__parallel_rows(w, num_threads, second_rows, &second);
+	r = atomic_load(&failed) ? SSS_ERR_OUT_OF_MEMORY : SSS_OK;
 done:
 	if (tables)
 		for (int32_t m = 0; m < count; m++)
