@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 3
+#define SSS_ABI_VERSION 4
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -185,8 +185,27 @@ enum sss_profile_kind {
 enum sss_burley_mapping {
 	SSS_BURLEY_CYCLES = 0,      /* d = radius / (4 pi), Cycles' Burley */
 	SSS_BURLEY_EEVEE = 1,       /* d = 0.0459101 radius, EEVEE legacy */
-	SSS_BURLEY_RANDOM_WALK = 2  /* radius = diffuse mean free path:
+	SSS_BURLEY_RANDOM_WALK = 2, /* radius = diffuse mean free path:
 	                               d = radius / (3.5 + 100 (A - 0.33)^4) */
+	SSS_BURLEY_CYCLES_RANDOM_WALK = 3 /* what Cycles 3.x's random walk
+	                               does with the radius, as measured
+	                               (sss_calibration.c): mean free path
+	                               l = radius sqrt(3 (1 - a')), a' from
+	                               Jensen's dipole Rd(a') = A (eta 1.4),
+	                               d = l / (1.9 - A + 3.5 (A - 0.8)^2) */
+};
+
+/* Matching another renderer's energy (sss_material.calibration). */
+enum sss_calibration {
+	SSS_CALIBRATION_NONE = 0,
+	SSS_CALIBRATION_CYCLES_RANDOM_WALK = 1 /* the diffuse light of a
+	                               scattering pixel is scaled per channel
+	                               by g(DiffCol), the random walk's
+	                               reflectance over the Principled diffuse
+	                               lobe's, measured on thick slabs
+	                               (sss_calibration.c), after the blur
+	                               (a brighter DiffCol where light
+	                               leaves, as the random walk has) */
 };
 
 enum sss_texturing {
@@ -270,6 +289,11 @@ typedef struct sss_material {
 	float transmission_scale;        /* >= 0 (1): fast */
 	float transmission_ambient;      /* >= 0 (0): fast */
 	float thickness_scale;           /* >= 0 (1): multiplies the pass */
+
+	/* Energy calibration (sss_calibration; all kinds; NONE by default).
+	 * The gain is 1 + strength (g - 1), so strength 0 stays the
+	 * identity. */
+	int32_t calibration;
 } sss_material;
 
 /* Sets struct_size, kind and that kind's defaults (d'Eon skin for
@@ -314,6 +338,13 @@ SSS_API sss_result sss_kernel_1d(const sss_material *mat,
 SSS_API sss_result sss_transmittance(const sss_material *mat,
                                      double thickness_metres, double facing,
                                      double out[3]);
+
+/* The energy gain of a calibration for a diffuse colour (albedo, clamped
+ * to [0, 1]; a non-finite channel gets 1): the measured reflectance of the
+ * calibrated renderer over the plain diffuse lobe's. NONE gives 1. */
+SSS_API sss_result sss_calibration_gain(int32_t calibration,
+                                        const float albedo[3],
+                                        float gain[3]);
 
 /* --------------------------------------------------------------- options */
 

@@ -350,6 +350,9 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 				}
 				light[c] = l;
 			}
+			if (slot[i] >= 0) /* energy calibration, at the exit pixel's
+			                     colour (sss_calibration.c) */
+				sss__calibration_apply(&materials[slot[i]], col, light);
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
 				           y * stride_of(out_diffuse_light) +

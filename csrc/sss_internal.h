@@ -64,6 +64,14 @@ float sss__table_lookup(const float *table, double x, double inv_support);
 void sss__line_mass3(const sss__kernel *k, double a, double b,
                      double out[3]);
 
+/* Calibration against Cycles' random walk (sss_calibration.c): Burley d
+ * over the radius for an albedo (SSS_BURLEY_CYCLES_RANDOM_WALK), and the
+ * per-pixel energy gain 1 + strength (g(DiffCol) - 1) on the scattered
+ * light. */
+double sss__cycles_rw_d_over_radius(double albedo);
+void sss__calibration_apply(const sss_material *mat, const float *diff_col,
+                            float *light);
+
 /* Camera (sss_camera.c). */
 sss_result sss__projection_make(const sss_camera *cam, int32_t width,
                                 int32_t height, sss__projection *p,

@@ -70,6 +70,8 @@ void sss_material_default(sss_material *mat, int32_t kind)
 	mat->transmission_scale = 1.0f;
 	mat->transmission_ambient = 0.0f;
 	mat->thickness_scale = 1.0f;
+
+	mat->calibration = SSS_CALIBRATION_NONE;
 }
 
 #define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
@@ -123,6 +125,10 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 
 	if ((r = sss__transmission_validate(mat, errbuf, errbuf_len)))
 		return r;
+	if (mat->calibration != SSS_CALIBRATION_NONE &&
+	    mat->calibration != SSS_CALIBRATION_CYCLES_RANDOM_WALK)
+		return FAIL("material %d: unknown calibration %d", idx,
+		            mat->calibration);
 
 	switch (mat->kind) {
 	case SSS_PROFILE_BURLEY:
@@ -130,10 +136,11 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 		                errbuf_len)))
 			return r;
 		if (mat->burley_mapping < SSS_BURLEY_CYCLES ||
-		    mat->burley_mapping > SSS_BURLEY_RANDOM_WALK)
+		    mat->burley_mapping > SSS_BURLEY_CYCLES_RANDOM_WALK)
 			return FAIL("material %d: unknown burley_mapping %d", idx,
 			            mat->burley_mapping);
-		if (mat->burley_mapping == SSS_BURLEY_RANDOM_WALK &&
+		if ((mat->burley_mapping == SSS_BURLEY_RANDOM_WALK ||
+		     mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK) &&
 		    (r = check3(mat->albedo, 0.0f, 1.0f, 0, "albedo", idx, errbuf,
 		                errbuf_len)))
 			return r;
@@ -217,6 +224,10 @@ sss_result sss_burley_d(const sss_material *mat, double d_out[3])
 			d_out[c] = radius / (3.5 + 100.0 * a * a * a * a);
 			break;
 		}
+		case SSS_BURLEY_CYCLES_RANDOM_WALK:
+			d_out[c] = radius * sss__cycles_rw_d_over_radius(
+			                        mat->albedo[c]);
+			break;
 		default:
 			return SSS_ERR_INVALID_ARGUMENT;
 		}

@@ -312,6 +312,11 @@ static const name_value profiles[] = {
 static const name_value mappings[] = {
 	{"cycles", SSS_BURLEY_CYCLES}, {"eevee", SSS_BURLEY_EEVEE},
 	{"random-walk", SSS_BURLEY_RANDOM_WALK},
+	{"cycles-random-walk", SSS_BURLEY_CYCLES_RANDOM_WALK},
+};
+static const name_value calibrations[] = {
+	{"none", SSS_CALIBRATION_NONE},
+	{"cycles-random-walk", SSS_CALIBRATION_CYCLES_RANDOM_WALK},
 };
 static const name_value transmissions[] = {
 	{"off", SSS_TRANSMISSION_OFF}, {"burley", SSS_TRANSMISSION_BURLEY},
@@ -413,6 +418,7 @@ enum {
 	M_TRANSMISSION, M_T_STRENGTH, M_T_COLOR, M_T_DISTANCE,
 	M_T_TRANSLUCENCY, M_T_DISTORTION, M_T_POWER, M_T_SCALE, M_T_AMBIENT,
 	M_THICKNESS_SCALE,
+	M_CALIBRATION,
 	M_COUNT
 };
 static const char *const material_keys[M_COUNT] = {
@@ -425,6 +431,7 @@ static const char *const material_keys[M_COUNT] = {
 	"transmission_distance", "transmission_translucency",
 	"transmission_distortion", "transmission_power", "transmission_scale",
 	"transmission_ambient", "thickness_scale",
+	"calibration",
 };
 /* The profile a key belongs to; -1 for keys every profile reads. */
 static const int8_t key_profile[M_COUNT] = {
@@ -435,6 +442,7 @@ static const int8_t key_profile[M_COUNT] = {
 	SSS_PROFILE_NEAR_FAR, SSS_PROFILE_NEAR_FAR, SSS_PROFILE_NEAR_FAR,
 	SSS_PROFILE_NEAR_FAR,
 	-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, /* transmission: every kind */
+	-1, /* calibration */
 };
 
 static const char *const gaussian_keys[2] = {"variance", "weight"};
@@ -603,6 +611,11 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	    (r = get_enum(c, f[M_TRANSMISSION], p, "transmission model",
 	                  transmissions, COUNT(transmissions),
 	                  &m->transmission)))
+		return r;
+	join(p, mp, "calibration");
+	if (f[M_CALIBRATION] &&
+	    (r = get_enum(c, f[M_CALIBRATION], p, "calibration", calibrations,
+	                  COUNT(calibrations), &m->calibration)))
 		return r;
 	join(p, mp, "gaussians");
 	if (f[M_GAUSSIANS] && (r = parse_gaussians(c, f[M_GAUSSIANS], p, m)))

@@ -325,7 +325,8 @@ static const struct {
 	{"err-mapping", "{\"materials\": [{\"pass_index\": 1, \"profile\": "
 	 "\"burley\", \"mapping\": \"CYCLES\"}]}",
 	 SSS_ERR_INVALID_ARGUMENT, "materials[0].mapping: unknown mapping "
-	 "'CYCLES' (expected cycles, eevee, random-walk)"},
+	 "'CYCLES' (expected cycles, eevee, random-walk, "
+	 "cycles-random-walk)"},
 	{"err-texturing", "{\"materials\": [{\"pass_index\": 1, \"profile\": "
 	 "\"none\", \"texturing\": \"pre\"}]}",
 	 SSS_ERR_INVALID_ARGUMENT, "materials[0].texturing: unknown texturing "

@@ -1,0 +1,500 @@
+"""Measure how Cycles' random-walk SSS differs from the plain diffuse lobe
+that libsss blurs, on flat slabs, headless:
+
+    blender -b --factory-startup --python-exit-code 1 \\
+        --python blender_scripts/calibrate.py -- --out DIR \\
+        [--part energy,edge,texture] [--samples 128] [--size 64]
+        [--radii 0.05,0.2] [--method RANDOM_WALK]
+
+energy: a large thick box (2 x 2 m face, 1 m deep) faces an orthographic
+  camera that sees only the middle 0.2 m of its face, under a uniform white
+  world (strength 1, no lamps; --light sun: a sun at normal incidence
+  instead). Per render three albedos (one per colour channel: Base Color =
+  Subsurface Color = (a, b, c), Subsurface 1, Subsurface Radius (r, r, r),
+  Specular 0) are rendered with the random walk and with Subsurface 0 (the
+  add-on's SSS-off render). The mean Combined over the central half of the
+  frame of one divided by the other is the energy ratio RW / diffuse of
+  that albedo; the diffuse side is A exactly under the white world (a
+  check). Written to DIR/energy.csv.
+edge: the same box under a sun at normal incidence, half of it shadowed by
+  a plate that only casts shadows (invisible to camera and to indirect
+  rays): random walk against the SSS-off render scattered by libsss with
+  each Burley radius mapping (cycles, eevee, random-walk). Edge profiles
+  are averaged along the edge, normalised by their lit plateau, and
+  compared (RMSE over the profile); the Burley d that fits the random walk
+  best is also searched (numerically integrated edge response). Written to
+  DIR/edge.csv and DIR/edge_profiles.csv.
+texture: the box with a striped Base Color (a checker texture) under the
+  sun, random walk against SSS-off + libsss with post and pre-and-post
+  texturing. Written to DIR/texture.csv.
+
+Everything is Cycles on the CPU with denoising and adaptive sampling off,
+clamping off, seed 1 (SSS off) and 2 (random walk).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+import time
+import traceback
+
+import bpy
+from mathutils import Vector
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, ".."))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+
+import numpy as np  # noqa: E402
+
+ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
+               (0.85, 0.9, 0.95), (0.98, 0.99, 1.0))
+VIEW = 0.2   # metres of slab face the camera sees
+
+
+def log(*a):
+    print("calibrate:", *a, flush=True)
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser(prog="calibrate.py")
+    p.add_argument("--out", required=True)
+    p.add_argument("--part", default="energy,edge,texture")
+    p.add_argument("--samples", type=int, default=128)
+    p.add_argument("--size", type=int, default=64)
+    p.add_argument("--radii", default="0.05")
+    p.add_argument("--method", default="RANDOM_WALK")
+    p.add_argument("--light", default="world", choices=("world", "sun"))
+    p.add_argument("--sun-angle", type=float, default=0.0,
+                   help="energy with --light sun: degrees from the normal")
+    p.add_argument("--view", type=float, default=0.2,
+                   help="metres of the face the camera sees")
+    p.add_argument("--albedos", help="override: a,b,c;d,e,f")
+    args = p.parse_args(argv)
+    args.part = args.part.split(",")
+    args.radii = [float(x) for x in args.radii.split(",")]
+    args.out = os.path.abspath(args.out)
+    global VIEW
+    VIEW = args.view
+    return args
+
+
+# ---------------------------------------------------------------- scene
+
+def reset():
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj, do_unlink=True)
+    scene = bpy.context.scene
+    cam_data = bpy.data.cameras.new("Cam")
+    cam_data.type = "ORTHO"
+    cam_data.ortho_scale = VIEW
+    cam = bpy.data.objects.new("Cam", cam_data)
+    scene.collection.objects.link(cam)
+    cam.location = (0, -5, 0)
+    cam.rotation_euler = (math.pi / 2, 0, 0)
+    scene.camera = cam
+    return scene
+
+
+def slab(scene):
+    """The box: face at y = 0 towards the camera, 6 x 6 m, 4 m deep."""
+    mat = bpy.data.materials.new("Slab")
+    mat.use_nodes = True
+    mat.pass_index = 1
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Specular"].default_value = 0.0
+    bsdf.inputs["Roughness"].default_value = 0.5
+    mesh = bpy.data.meshes.new("Slab")
+    obj = bpy.data.objects.new("Slab", mesh)
+    scene.collection.objects.link(obj)
+    import bmesh
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0)
+    bmesh.ops.scale(bm, vec=(6.0, 4.0, 6.0), verts=bm.verts)
+    bmesh.ops.translate(bm, vec=(0, 2.0, 0), verts=bm.verts)
+    bm.to_mesh(mesh)
+    bm.free()
+    mesh.materials.append(mat)
+    return obj, mat
+
+
+def world(scene, strength):
+    if scene.world is None:
+        scene.world = bpy.data.worlds.new("World")
+    scene.world.use_nodes = True
+    bg = scene.world.node_tree.nodes["Background"]
+    bg.inputs["Color"].default_value = (1, 1, 1, 1)
+    bg.inputs["Strength"].default_value = strength
+
+
+def sun(scene, direction=(0, 1, 0), strength=3.0):
+    data = bpy.data.lights.new("Sun", "SUN")
+    data.energy = strength
+    data.angle = math.radians(0.05)
+    obj = bpy.data.objects.new("Sun", data)
+    scene.collection.objects.link(obj)
+    obj.rotation_euler = Vector(direction).to_track_quat("-Z", "Y") \
+        .to_euler()
+    return obj
+
+
+def occluder(scene):
+    """A plate in front of the left half of the face that only casts
+    shadows: the edge runs along z at x = 0."""
+    mesh = bpy.data.meshes.new("Plate")
+    obj = bpy.data.objects.new("Plate", mesh)
+    scene.collection.objects.link(obj)
+    mesh.from_pydata([(-9, -.05, -9), (0, -.05, -9), (0, -.05, 9),
+                      (-9, -.05, 9)],
+                     [], [(0, 1, 2, 3)])
+    for attr in ("visible_camera", "visible_diffuse", "visible_glossy",
+                 "visible_transmission", "visible_volume_scatter"):
+        setattr(obj, attr, False)
+    return obj
+
+
+def setup_render(scene, args, out_path):
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x = r.resolution_y = args.size
+    r.resolution_percentage = 100
+    r.use_compositing = False
+    r.use_sequencer = False
+    c = scene.cycles
+    c.device = "CPU"
+    c.samples = args.samples
+    c.use_denoising = False
+    c.use_adaptive_sampling = False
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.filter_width = 0.01  # point-sampled pixels: edges stay sharp
+    layer = scene.view_layers[0]
+    for name in ("diffuse_direct", "diffuse_indirect", "diffuse_color",
+                 "glossy_direct", "glossy_indirect", "glossy_color", "z",
+                 "material_index"):
+        setattr(layer, "use_pass_" + name, True)
+
+
+def set_material(mat, colour, radius, subsurface, method):
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.subsurface_method = method
+    bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
+    bsdf.inputs["Subsurface Color"].default_value = (*colour, 1.0)
+    bsdf.inputs["Subsurface"].default_value = subsurface
+    bsdf.inputs["Subsurface Radius"].default_value = (1.0, 1.0, 1.0)
+    # Radius in metres = Subsurface Radius x Subsurface: keep it r.
+    if subsurface > 0:
+        bsdf.inputs["Subsurface Radius"].default_value = \
+            (radius / subsurface,) * 3
+
+
+def render_to(scene, path, seed):
+    scene.cycles.seed = seed
+    t0 = time.perf_counter()
+    if bpy.ops.render.render() != {"FINISHED"}:
+        raise RuntimeError("render failed")
+    seconds = time.perf_counter() - t0
+    s = scene.render.image_settings
+    s.file_format = "OPEN_EXR_MULTILAYER"
+    s.color_depth = "32"
+    s.exr_codec = "ZIP"
+    bpy.data.images["Render Result"].save_render(path, scene=scene)
+    return read_exr(path), seconds
+
+
+def read_exr(path):
+    import OpenImageIO as oiio
+    inp = oiio.ImageInput.open(path)
+    if not inp:
+        raise RuntimeError(f"cannot read {path}: {oiio.geterror()}")
+    spec = inp.spec()
+    px = inp.read_image(oiio.FLOAT)
+    inp.close()
+    return {n: np.array(px[:, :, i]) for i, n in
+            enumerate(spec.channelnames)}
+
+
+def rgb(ch, name):
+    for prefix in (f"ViewLayer.{name}", name):
+        if f"{prefix}.R" in ch:
+            return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
+    raise KeyError(name)
+
+
+def albedo_sets(args):
+    if args.albedos:
+        return [tuple(float(v) for v in s.split(",")) for s in
+                args.albedos.split(";")]
+    return ALBEDO_SETS
+
+
+# --------------------------------------------------------------- energy
+
+def part_energy(args):
+    rows = []
+    for radius in args.radii:
+        for albedo in albedo_sets(args):
+            scene = reset()
+            _, mat = slab(scene)
+            if args.light == "world":
+                world(scene, 1.0)
+            else:
+                world(scene, 0.0)
+                t = math.radians(args.sun_angle)
+                sun(scene, (math.sin(t), math.cos(t), 0.0))
+            setup_render(scene, args, None)
+            n = args.size
+            win = (slice(n // 4, 3 * n // 4), slice(n // 4, 3 * n // 4))
+            out = {}
+            for label, sub in (("off", 0.0), ("rw", 1.0)):
+                set_material(mat, albedo, radius, sub, args.method)
+                path = os.path.join(args.out, "work",
+                                    f"energy_{label}_{radius}_"
+                                    f"{albedo[0]}.exr")
+                ch, sec = render_to(scene, path, 1 if label == "off" else 2)
+                comb = rgb(ch, "Combined")[win]
+                diff = (rgb(ch, "DiffDir") + rgb(ch, "DiffInd"))[win] * \
+                    rgb(ch, "DiffCol")[win]
+                out[label] = (comb.reshape(-1, 3), diff.reshape(-1, 3), sec)
+            for c in range(3):
+                off = out["off"][0][:, c]
+                rw = out["rw"][0][:, c]
+                ratio = rw.mean() / off.mean()
+                # Standard error of the ratio from pixel scatter.
+                se = ratio * math.hypot(rw.std() / rw.mean(),
+                                        off.std() / max(off.mean(), 1e-9)) \
+                    / math.sqrt(rw.size)
+                row = dict(method=args.method, light=args.light,
+                           sun_angle=args.sun_angle,
+                           radius=radius, albedo=albedo[c],
+                           off=float(off.mean()), rw=float(rw.mean()),
+                           ratio=float(ratio), stderr=float(se),
+                           rw_diffpasses=float(out["rw"][1][:, c].mean()),
+                           seconds_off=out["off"][2],
+                           seconds_rw=out["rw"][2])
+                rows.append(row)
+                log(f"energy r={radius} A={albedo[c]:.3f}: off "
+                    f"{row['off']:.4f} rw {row['rw']:.4f} ratio "
+                    f"{ratio:.4f} +- {se:.4f} ({out['rw'][2]:.1f} s)")
+    name = f"energy_{args.method.lower()}_{args.light}" + (
+        f"{args.sun_angle:g}" if args.light == "sun" else "") + ".csv"
+    write_csv(os.path.join(args.out, name), rows)
+
+
+def write_csv(path, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    log("wrote", path)
+
+
+# ---------------------------------------------------------- edge, texture
+
+def scene_json(path, albedo, radius, mapping, texturing="post",
+               calibration=None):
+    mat = {"pass_index": 1, "profile": "burley",
+           "radius": [radius] * 3, "mapping": mapping,
+           "albedo": [float(a) for a in albedo], "texturing": texturing}
+    if calibration:
+        mat["calibration"] = calibration
+    desc = {"version": 1,
+            "camera": {"type": "ORTHO", "ortho_scale": VIEW,
+                       "sensor_width": 36, "sensor_height": 24,
+                       "sensor_fit": "AUTO", "lens": 50,
+                       "pixel_aspect_x": 1, "pixel_aspect_y": 1},
+            "unit_scale": 1.0, "method": "separable-exact", "taps": 65,
+            "materials": [mat]}
+    with open(path, "w") as f:
+        json.dump(desc, f)
+
+
+def scatter(inp, desc, out):
+    from separable_sss import native
+    with native.Scene(desc) as sc:
+        sc.process(inp, out)
+    ch = read_exr(out)
+    return rgb(ch, "SSS.Combined")
+
+
+def edge_response(x, d):
+    """Share of a Burley (shape d) profile's mass on the lit side, at
+    signed distance x (metres; x > 0 lit) from a straight shadow edge."""
+    r = d * np.geomspace(1e-4, 40.0, 4000)
+    pdf = (np.exp(-r / d) + np.exp(-r / (3 * d))) / (4 * d)  # 2 pi r R(r)
+    dr = np.gradient(r)
+    out = []
+    for xi in np.atleast_1d(x):
+        a = abs(xi)
+        beyond = np.where(r > a, np.arccos(np.clip(a / r, -1, 1)) / np.pi,
+                          0.0)
+        tail = float(np.sum(pdf * beyond * dr))
+        out.append(1.0 - tail if xi >= 0 else tail)
+    return np.array(out)
+
+
+def profile_along(img, n):
+    """Mean over the rows of the middle half: one value per column."""
+    return img[n // 4:3 * n // 4].mean(axis=0)
+
+
+def part_edge(args):
+    rows, prof_rows = [], []
+    from separable_sss import native  # noqa: F401  (fail early)
+    for radius in args.radii:
+        for albedo in albedo_sets(args):
+            scene = reset()
+            _, mat = slab(scene)
+            world(scene, 0.0)
+            sun(scene)
+            occluder(scene)
+            setup_render(scene, args, None)
+            n = args.size
+            tag = f"{radius}_{albedo[0]}"
+            set_material(mat, albedo, radius, 1.0, args.method)
+            rw, _ = render_to(scene, os.path.join(args.out, "work",
+                                                  f"edge_rw_{tag}.exr"), 2)
+            rw = rgb(rw, "Combined")
+            set_material(mat, albedo, radius, 0.0, args.method)
+            inp = os.path.join(args.out, "work", f"edge_off_{tag}.exr")
+            off, _ = render_to(scene, inp, 1)
+            off = rgb(off, "Combined")
+            # Pixel centres in metres, x = 0 at the edge (frame centre).
+            px = (np.arange(n) + 0.5) / n * VIEW - VIEW / 2
+            prw = profile_along(rw, n)
+            poff = profile_along(off, n)
+            results = {}
+            for mapping in ("cycles", "eevee", "random-walk"):
+                desc = inp.replace(".exr", f"_{mapping}.json")
+                scene_json(desc, albedo, radius, mapping)
+                img = scatter(inp, desc, inp.replace(".exr",
+                                                     f"_{mapping}_sss.exr"))
+                results[mapping] = profile_along(img, n)
+            for c in range(3):
+                lit = poff[-n // 8:, c].mean()
+                lit_rw = prw[-n // 8:, c].mean()
+                # Everything over the SSS-off render's lit plateau (flat
+                # and exact): energy differences count too.
+                ref = prw[:, c] / lit
+                row = dict(method=args.method, radius=radius,
+                           albedo=albedo[c], lit_off=float(lit),
+                           lit_rw=float(lit_rw),
+                           energy_ratio=float(lit_rw / lit))
+                for mapping, prof in results.items():
+                    p = prof[:, c] / lit
+                    row["rmse_" + mapping] = float(np.sqrt(np.mean(
+                        (p - ref) ** 2)))
+                # Best-fitting Burley d, in units of the radius.
+                best = None
+                for f in np.geomspace(0.01, 1.0, 121):
+                    model = edge_response(px, f * radius)
+                    k = float(model @ ref / (model @ model))  # energy
+                    e = float(np.sqrt(np.mean((k * model - ref) ** 2)))
+                    if best is None or e < best[1]:
+                        best = (f, e)
+                row["d_fit_over_r"] = float(best[0])
+                row["rmse_fit"] = best[1]
+                a = albedo[c]
+                row["d_over_r_cycles"] = 0.25 / math.pi
+                row["d_over_r_eevee"] = 0.0459101
+                row["d_over_r_random_walk"] = 1.0 / (
+                    3.5 + 100 * (a - 0.33) ** 4)
+                rows.append(row)
+                log("edge", {k: (round(v, 4) if isinstance(v, float) else v)
+                             for k, v in row.items()})
+                for i in range(n):
+                    prof_rows.append(dict(
+                        radius=radius, albedo=a, x=float(px[i]),
+                        rw=float(ref[i]),
+                        off=float(poff[i, c] / lit),
+                        **{m: float(results[m][i, c] / lit)
+                           for m in results}))
+    write_csv(os.path.join(args.out, f"edge_{args.method.lower()}.csv"),
+              rows)
+    write_csv(os.path.join(args.out, "edge_profiles.csv"), prof_rows)
+
+
+def part_texture(args):
+    """Stripes of Base Color 4 px wide under the sun: which texturing
+    mode's blur of colour matches the random walk."""
+    rows = []
+    for radius in args.radii:
+        scene = reset()
+        _, mat = slab(scene)
+        world(scene, 0.0)
+        sun(scene)
+        setup_render(scene, args, None)
+        tree = mat.node_tree
+        bsdf = tree.nodes["Principled BSDF"]
+        checker = tree.nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Color1"].default_value = (0.9, 0.8, 0.7, 1)
+        checker.inputs["Color2"].default_value = (0.3, 0.15, 0.1, 1)
+        checker.inputs["Scale"].default_value = 1.0 / (VIEW / 8)
+        # Object coordinates: stripes along x only (z scaled to 0).
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        sep = tree.nodes.new("ShaderNodeMapping")
+        sep.inputs["Scale"].default_value = (1.0, 0.0, 0.0)
+        tree.links.new(coords.outputs["Object"], sep.inputs["Vector"])
+        tree.links.new(sep.outputs["Vector"], checker.inputs["Vector"])
+        set_material(mat, (0.5, 0.5, 0.5), radius, 1.0, args.method)
+        for sock in ("Base Color", "Subsurface Color"):
+            tree.links.new(checker.outputs["Color"], bsdf.inputs[sock])
+        rw, _ = render_to(scene, os.path.join(args.out, "work",
+                                              f"tex_rw_{radius}.exr"), 2)
+        rw = rgb(rw, "Combined")
+        bsdf.inputs["Subsurface"].default_value = 0.0
+        inp = os.path.join(args.out, "work", f"tex_off_{radius}.exr")
+        offch, _ = render_to(scene, inp, 1)
+        off = rgb(offch, "Combined")
+        n = args.size
+        win = (slice(n // 4, 3 * n // 4), slice(n // 8, 7 * n // 8))
+        mean_col = rgb(offch, "DiffCol")[win].reshape(-1, 3).mean(axis=0)
+        res = {"no-sss": off}
+        for tex in ("post", "pre-and-post"):
+            for cal in (None, "cycles-random-walk"):
+                desc = inp.replace(".exr", f"_{tex}_{cal}.json")
+                scene_json(desc, mean_col, radius, "cycles-random-walk", tex,
+                           cal)
+                try:
+                    res[f"{tex}{'+cal' if cal else ''}"] = scatter(
+                        inp, desc, inp.replace(".exr", f"_{tex}_{cal}_o.exr"))
+                except Exception as e:  # library without calibration
+                    log(f"{tex} {cal}: {e}")
+        for name, img in res.items():
+            d = img[win] - rw[win]
+            rows.append(dict(method=args.method, radius=radius, mode=name,
+                             rmse=float(np.sqrt(np.mean(d ** 2))),
+                             rel_mae=float(np.abs(d).sum() /
+                                           np.abs(rw[win]).sum()),
+                             mean_ratio=float(img[win].mean() /
+                                              rw[win].mean())))
+            log("texture", rows[-1])
+    write_csv(os.path.join(args.out, f"texture_{args.method.lower()}.csv"),
+              rows)
+
+
+def main():
+    args = parse_args()
+    os.makedirs(os.path.join(args.out, "work"), exist_ok=True)
+    os.environ.setdefault("SSS_LIB", os.path.join(ROOT, "build",
+                                                  "libsss.so"))
+    t0 = time.perf_counter()
+    if "energy" in args.part:
+        part_energy(args)
+    if "edge" in args.part:
+        part_edge(args)
+    if "texture" in args.part:
+        part_texture(args)
+    log(f"done in {time.perf_counter() - t0:.0f} s")
+
+
+try:
+    main()
+except SystemExit:
+    raise
+except Exception:
+    traceback.print_exc()
+    sys.exit(1)

@@ -1,0 +1,199 @@
+/* test_calibration.c - the measured match to Cycles' random walk: the
+ * energy table (finite, reflectance A g(A) never decreasing, gain 1 where
+ * no calibration applies), the cycles-random-walk radius mapping, and
+ * sss_apply's invariants with a calibrated material (radius 0, strength 0
+ * and radius_scale 0 stay the identity; the gain scales a flat field by
+ * exactly g(DiffCol)). */
+#include "test_util.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 24
+#define H 20
+
+static void flat_passes(sss_passes *p, float *dd, float *col, float *z,
+                        float *idx, float light, const float c3[3])
+{
+	for (int i = 0; i < W * H; i++) {
+		for (int c = 0; c < 3; c++) {
+			dd[3 * i + c] = light;
+			col[3 * i + c] = c3[c];
+		}
+		z[i] = 2.0f;
+		idx[i] = 1.0f;
+	}
+	memset(p, 0, sizeof *p);
+	p->diff_dir = (sss_image){dd, W, H, 3, 0};
+	p->diff_col = (sss_image){col, W, H, 3, 0};
+	p->depth = (sss_image){z, W, H, 1, 0};
+	p->index_ma = (sss_image){idx, W, H, 1, 0};
+}
+
+static void test_table(void)
+{
+	float prev = -1.0f;
+	int monotone = 1, finite = 1, sane = 1;
+	for (int i = 0; i <= 1000; i++) {
+		float a = (float)i / 1000.0f, al[3] = {a, a, a}, g[3];
+		CHECK_STATUS("table-status", SSS_OK,
+		             sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK,
+		                                  al, g));
+		finite &= isfinite(g[0]) && g[0] == g[1] && g[1] == g[2];
+		sane &= g[0] > 0.8f && g[0] < 1.2f;
+		/* Reflectance A g(A) never decreases with A. */
+		if (a * g[0] < prev - 1e-6f)
+			monotone = 0;
+		prev = a * g[0];
+	}
+	CHECK("table-finite", finite, "non-finite or channel-dependent gain");
+	CHECK("table-sane", sane, "gain outside (0.8, 1.2)");
+	CHECK("table-monotone", monotone, "A g(A) decreases somewhere");
+
+	float al[3] = {0.3f, 0.8f, 1.0f}, g[3];
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, al, g);
+	CHECK("table-measured", fabsf(g[0] - 1.013f) < 1e-6f &&
+	      fabsf(g[1] - 1.012f) < 1e-6f && fabsf(g[2] - 0.9225f) < 1e-6f,
+	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
+	float odd[3] = {-1.0f, 2.0f, NAN};
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, odd, g);
+	CHECK("table-clamp", g[0] == 1.010f && g[1] == 0.9225f && g[2] == 1.0f,
+	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
+	sss_calibration_gain(SSS_CALIBRATION_NONE, al, g);
+	CHECK("none-is-one", g[0] == 1.0f && g[1] == 1.0f && g[2] == 1.0f,
+	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
+	CHECK_STATUS("bad-calibration", SSS_ERR_INVALID_ARGUMENT,
+	             sss_calibration_gain(7, al, g));
+	CHECK_STATUS("null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_calibration_gain(SSS_CALIBRATION_NONE, NULL, g));
+}
+
+static void test_material(void)
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	CHECK("default-none", m.calibration == SSS_CALIBRATION_NONE, "%d",
+	      m.calibration);
+	m.calibration = 5;
+	CHECK_STATUS("validate-bad", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&m, NULL, 0));
+	m.calibration = SSS_CALIBRATION_CYCLES_RANDOM_WALK;
+	CHECK_STATUS("validate-ok", SSS_OK, sss_material_validate(&m, NULL, 0));
+
+	/* The measured mapping: d / r against the slab fits (within 8 %). */
+	static const float a[] = {0.1f, 0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f};
+	static const double fit[] = {0.316, 0.210, 0.145, 0.098, 0.067, 0.034,
+	                             0.034};
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	for (int i = 0; i < 7; i++) {
+		m.radius[0] = m.radius[1] = m.radius[2] = 1.0f;
+		m.albedo[0] = m.albedo[1] = m.albedo[2] = a[i];
+		double d[3];
+		CHECK_STATUS("mapping-status", SSS_OK, sss_burley_d(&m, d));
+		CHECK("mapping-fit", fabs(d[0] / fit[i] - 1.0) < 0.08,
+		      "A %g: d/r %g, measured %g", (double)a[i], d[0], fit[i]);
+	}
+	m.albedo[2] = 1.5f;
+	CHECK_STATUS("mapping-albedo", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&m, NULL, 0));
+	m.albedo[2] = 0.5f;
+	m.radius[0] = m.radius[1] = m.radius[2] = 0.0f;
+	double d[3];
+	sss_burley_d(&m, d);
+	CHECK("mapping-zero", d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0,
+	      "%g", d[0]);
+}
+
+/* Runs sss_apply on flat passes; returns the first pixel's light. */
+static sss_result run(const sss_material *m, float radius_scale,
+                      const float col[3], float light, float out[3],
+                      int *identical)
+{
+	float *dd = malloc(sizeof(float) * 3 * W * H);
+	float *dc = malloc(sizeof(float) * 3 * W * H);
+	float *z = malloc(sizeof(float) * W * H);
+	float *idx = malloc(sizeof(float) * W * H);
+	float *o = malloc(sizeof(float) * 3 * W * H);
+	sss_passes p;
+	flat_passes(&p, dd, dc, z, idx, light, col);
+	sss_camera cam;
+	sss_camera_default(&cam);
+	sss_options opt;
+	sss_options_default(&opt);
+	opt.radius_scale = radius_scale;
+	opt.num_threads = 1;
+	sss_image ol = {o, W, H, 3, 0};
+	sss_result r = sss_apply(&p, &cam, m, 1, &opt, NULL, &ol, NULL, 0);
+	memcpy(out, o + 3 * (W * (H / 2) + W / 2), sizeof(float) * 3);
+	*identical = memcmp(o, dd, sizeof(float) * 3 * W * H) == 0;
+	free(dd);
+	free(dc);
+	free(z);
+	free(idx);
+	free(o);
+	return r;
+}
+
+static void test_apply(void)
+{
+	const float col[3] = {0.3f, 0.8f, 0.97f};
+	float g[3], out[3];
+	int same;
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, col, g);
+	for (int t = 0; t < 2; t++) {
+		sss_material m;
+		sss_material_default(&m, SSS_PROFILE_BURLEY);
+		m.pass_index = 1;
+		m.texturing = t ? SSS_TEXTURING_PRE_AND_POST : SSS_TEXTURING_POST;
+		m.calibration = SSS_CALIBRATION_CYCLES_RANDOM_WALK;
+		m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+		memcpy(m.albedo, col, sizeof col);
+		m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+
+		/* A flat field stays flat, times g(DiffCol) exactly. */
+		CHECK_STATUS("apply-status", SSS_OK, run(&m, 1.0f, col, 2.0f, out,
+		                                         &same));
+		for (int c = 0; c < 3; c++)
+			CHECK("apply-gain", fabsf(out[c] - 2.0f * g[c]) < 2e-5f,
+			      "texturing %d channel %d: %g, expected %g", t, c,
+			      (double)out[c], 2.0 * g[c]);
+
+		/* Nothing scatters: nothing is scaled, bit for bit. */
+		run(&m, 0.0f, col, 2.0f, out, &same);
+		CHECK("radius-scale-0", same, "texturing %d", t);
+		m.strength = 0.0f;
+		run(&m, 1.0f, col, 2.0f, out, &same);
+		CHECK("strength-0", same, "texturing %d", t);
+		m.strength = 1.0f;
+		m.radius[0] = m.radius[1] = m.radius[2] = 0.0f;
+		run(&m, 1.0f, col, 2.0f, out, &same);
+		CHECK("radius-0", same, "texturing %d", t);
+
+		/* Half the strength: half the gain's change. */
+		m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+		m.strength = 0.5f;
+		run(&m, 1.0f, col, 2.0f, out, &same);
+		for (int c = 0; c < 3; c++)
+			CHECK("strength-half", fabsf(out[c] - 2.0f * (1.0f + 0.5f *
+			      (g[c] - 1.0f))) < 2e-5f, "channel %d: %g", c,
+			      (double)out[c]);
+
+		/* Calibration off: the flat field is unchanged. */
+		m.strength = 1.0f;
+		m.calibration = SSS_CALIBRATION_NONE;
+		run(&m, 1.0f, col, 2.0f, out, &same);
+		for (int c = 0; c < 3; c++)
+			CHECK("none-flat", fabsf(out[c] - 2.0f) < 2e-5f, "%g",
+			      (double)out[c]);
+	}
+}
+
+int main(void)
+{
+	test_table();
+	test_material();
+	test_apply();
+	return tu_finish("test_calibration");
+}
