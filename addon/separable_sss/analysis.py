@@ -18,6 +18,10 @@ class Found:
     color: tuple                  # Subsurface Color (or the SSS node's)
     method: str                   # BURLEY, RANDOM_WALK, ...
     linked_factor: bool = False   # Subsurface driven by a texture
+    # The albedo Cycles' random walk uses: the Principled BSDF's diffuse
+    # colour mix(Base Color, Subsurface Color, Subsurface) (the socket
+    # values; a texture's pixels come in through DiffCol instead).
+    albedo: tuple = None
 
 
 @dataclass
@@ -88,11 +92,14 @@ def analyse(scene):
                 if factor <= 0.0:
                     continue
                 r = principled_input(node, "subsurface_radius").default_value
+                sscol = tuple(principled_input(node, "subsurface_color")
+                              .default_value[:3])
+                base = principled_input(node, "base").default_value[:3]
                 found = Found(mat, mat.name, mat.pass_index, node,
                               tuple(v * factor * unit for v in r),
-                              tuple(principled_input(node, "subsurface_color")
-                                    .default_value[:3]),
-                              node.subsurface_method, linked)
+                              sscol, node.subsurface_method, linked,
+                              tuple(b + (c - b) * factor
+                                    for b, c in zip(base, sscol)))
                 if linked:
                     result.messages.append(
                         f"{mat.name}: Subsurface is driven by a texture; "
@@ -104,6 +111,7 @@ def analyse(scene):
                               tuple(v * scale * unit for v in r),
                               tuple(node.inputs["Color"].default_value[:3]),
                               node.falloff)
+                found.albedo = found.color
             if found:
                 result.found.append(found)
                 break  # one profile per material

@@ -73,18 +73,26 @@ def _material_entry(found):
     scale = s.radius_scale
     if s.profile in ("BLENDER", "BURLEY"):
         mapping = s.mapping
+        # Measured (blender_scripts/calibrate.py, csrc/sss_calibration.c):
+        # Cycles' random walk widens like cycles-random-walk, and returns
+        # the diffuse lobe's energy times g(albedo).
+        walk = s.profile == "BURLEY" or found.method == "RANDOM_WALK"
         if mapping == "AUTO":
-            mapping = "RANDOM_WALK" if found.method.startswith(
-                "RANDOM_WALK") and s.profile == "BLENDER" else "CYCLES"
-            if s.profile == "BURLEY":
-                mapping = "RANDOM_WALK"
+            mapping = "CYCLES_RANDOM_WALK" if walk else \
+                "RANDOM_WALK" if found.method.startswith("RANDOM_WALK") \
+                else "CYCLES"
         radius = found.radius if s.profile == "BLENDER" else tuple(s.radius)
-        albedo = found.color if s.profile == "BLENDER" else tuple(s.albedo)
+        albedo = (found.albedo or found.color) if s.profile == "BLENDER" \
+            else tuple(s.albedo)
         entry.update(profile="burley",
                      radius=[float(r) * scale for r in radius],
                      mapping={"CYCLES": "cycles", "EEVEE": "eevee",
-                              "RANDOM_WALK": "random-walk"}[mapping],
+                              "RANDOM_WALK": "random-walk",
+                              "CYCLES_RANDOM_WALK": "cycles-random-walk"}
+                     [mapping],
                      albedo=[min(max(float(a), 0.0), 1.0) for a in albedo])
+        if s.match_energy and walk:
+            entry["calibration"] = "cycles-random-walk"
     elif s.profile == "GAUSSIANS":
         entry.update(profile="gaussians", scale=s.gaussian_scale * scale)
     elif s.profile == "JIMENEZ":
@@ -252,6 +260,30 @@ def timings_text(job):
             f" write {t.get('write', 0):.2f} s")
 
 
+def cycles_rw_d_over_radius(a):
+    """Mirror of csrc/sss_calibration.c: Burley d over the radius for
+    Cycles' random walk at albedo a."""
+    eta = 1.4
+    f_dr = -1.440 / eta ** 2 + 0.710 / eta + 0.668 + 0.0636 * eta
+    k = 4.0 / 3.0 * (1.0 + f_dr) / (1.0 - f_dr)
+    if not a >= 1e-4:
+        alpha = 0.0
+    elif a >= 0.995:
+        alpha = 0.999999
+    else:
+        lo, hi = 0.0, 1.0
+        for _ in range(48):
+            mid = 0.5 * (lo + hi)
+            t = math.sqrt(3.0 * (1.0 - mid))
+            if 0.5 * mid * (1.0 + math.exp(-k * t)) * math.exp(-t) < a:
+                lo = mid
+            else:
+                hi = mid
+        alpha = 0.5 * (lo + hi)
+    d = math.sqrt(3.0 * (1.0 - alpha)) / (1.9 - a + 3.5 * (a - 0.8) ** 2)
+    return max(d, 0.032) if a < 0.995 else d
+
+
 def support_metres(scene, found):
     """How far the material's profile reaches, as the library will use it
     (mirrors csrc/sss_profile.c): Burley 16 d, Gaussians where all but
@@ -264,8 +296,11 @@ def support_metres(scene, found):
             d = [x / (4 * math.pi) for x in r]
         elif entry["mapping"] == "eevee":
             d = [x * 0.0459101 for x in r]
-        else:
+        elif entry["mapping"] == "random-walk":
             d = [x / (3.5 + 100 * (a - 0.33) ** 4)
+                 for x, a in zip(r, entry["albedo"])]
+        else:
+            d = [x * cycles_rw_d_over_radius(a)
                  for x, a in zip(r, entry["albedo"])]
         metres = 16 * max(d)
     elif profile == "gaussians":

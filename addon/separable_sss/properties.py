@@ -21,12 +21,15 @@ PROFILES = [
 ]
 
 MAPPINGS = [
-    ("AUTO", "Auto", "Random walk for Random Walk materials, Cycles' "
-     "Burley otherwise", 0),
+    ("AUTO", "Auto", "Cycles Random Walk for Random Walk materials (and "
+     "the Burley profile), Cycles' Burley otherwise", 0),
     ("CYCLES", "Cycles Burley", "d = radius / 4 pi", 1),
     ("EEVEE", "EEVEE", "d = 0.0459 radius", 2),
     ("RANDOM_WALK", "Mean Free Path",
-     "The radius is the diffuse mean free path (random walk)", 3),
+     "The radius is the diffuse mean free path (Christensen-Burley)", 3),
+    ("CYCLES_RANDOM_WALK", "Cycles Random Walk",
+     "What Cycles' random walk does with the radius, as measured on slabs: "
+     "its mean free path through Jensen's dipole, then Burley's fit", 4),
 ]
 
 TEXTURING = [
@@ -83,6 +86,11 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
     radius_scale: FloatProperty(
         name="Radius Scale", min=0.0, soft_max=10.0, default=1.0,
         description="Multiplies this material's scattering distances")
+    match_energy: BoolProperty(
+        name="Match Random-Walk Energy", default=True,
+        description="Scale the scattered light per colour channel by the "
+        "random walk's measured reflectance over the diffuse lobe's "
+        "(Random Walk materials and the Burley profile)")
     radius: FloatVectorProperty(
         name="Radius", size=3, min=0.0, soft_max=0.1, precision=5,
         subtype="NONE", unit="LENGTH",

@@ -75,7 +75,8 @@ def draw_material_settings(layout, context, mat, split=True):
         col.prop(s, "radius")
         _prop(col, s, "mapping", split)
         sub = col.column()
-        sub.active = s.mapping in {'RANDOM_WALK', 'AUTO'}
+        sub.active = s.mapping in {'RANDOM_WALK', 'CYCLES_RANDOM_WALK',
+                                   'AUTO'}
         sub.prop(s, "albedo")
     elif s.profile == 'GAUSSIANS':
         col.prop(s, "gaussian_scale")
@@ -89,6 +90,8 @@ def draw_material_settings(layout, context, mat, split=True):
         col.prop(s, "near_sigma")
         col.prop(s, "far_sigma")
     col.prop(s, "radius_scale")
+    if s.profile in {'BLENDER', 'BURLEY'}:
+        col.prop(s, "match_energy")
 
     _draw_transmission(layout, context, s, split)
 
