@@ -1,24 +1,37 @@
-/* sss_threads.c - row-band parallel loop. Each band writes disjoint rows
- * and every pixel's arithmetic is independent of the banding, so results
- * are identical for any thread count. */
+/* sss_threads.c - parallel loop over rows. The rows are cut into chunks
+ * that the threads take in turn from a shared counter, so a frame whose
+ * scattering object fills only part of it keeps every core busy. Every
+ * row's arithmetic is independent of who computes it, so results are
+ * identical for any thread count. */
 #include "sss_internal.h"
 
 #include <pthread.h>
+#include <stdatomic.h>
 #include <unistd.h>
 
 #define MAX_THREADS 256
+/* Chunks per thread: enough to even out uneven rows, few enough that
+ * per-chunk set-up (scratch, table rows) stays negligible. */
+#define CHUNKS_PER_THREAD 8
 
-typedef struct band {
+typedef struct shared {
 	sss__rows_fn fn;
 	void *ctx;
-	int32_t y0, y1;
-} band;
+	int32_t height, chunk;
+	atomic_int next;
+} shared;
 
-static void *band_main(void *arg)
+static void *worker(void *arg)
 {
-	band *b = arg;
-	b->fn(b->ctx, b->y0, b->y1);
-	return NULL;
+	shared *s = arg;
+	for (;;) {
+		int32_t c = atomic_fetch_add(&s->next, 1);
+		int64_t y0 = (int64_t)c * s->chunk;
+		if (y0 >= s->height)
+			return NULL;
+		int64_t y1 = y0 + s->chunk < s->height ? y0 + s->chunk : s->height;
+		s->fn(s->ctx, (int32_t)y0, (int32_t)y1);
+	}
 }
 
 void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
@@ -34,26 +47,22 @@ void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
 	if (n > height)
 		n = height;
 	if (n <= 1) {
-		fn(ctx, 0, height);
+		if (height > 0)
+			fn(ctx, 0, height);
 		return;
 	}
-	band bands[MAX_THREADS];
+	int32_t chunk = (int32_t)(((int64_t)height + (int64_t)n *
+	                           CHUNKS_PER_THREAD - 1) /
+	                          ((int64_t)n * CHUNKS_PER_THREAD));
+	shared s = {fn, ctx, height, chunk, 0};
 	pthread_t threads[MAX_THREADS];
 	int started[MAX_THREADS] = {0};
-	for (int32_t t = 0; t < n; t++) {
-		bands[t] = (band){fn, ctx, (int32_t)((int64_t)height * t / n),
-		                  (int32_t)((int64_t)height * (t + 1) / n)};
-		/* Band 0 runs on the calling thread; a band whose thread cannot
-		 * be started runs there too, so the result never depends on it. */
-		if (t > 0)
-			started[t] = pthread_create(&threads[t], NULL, band_main,
-			                            &bands[t]) == 0;
-	}
-	fn(ctx, bands[0].y0, bands[0].y1);
-	for (int32_t t = 1; t < n; t++) {
+	/* The calling thread works too; a thread that cannot be started
+	 * leaves its share to the others, so the result never depends on it. */
+	for (int32_t t = 1; t < n; t++)
+		started[t] = pthread_create(&threads[t], NULL, worker, &s) == 0;
+	worker(&s);
+	for (int32_t t = 1; t < n; t++)
 		if (started[t])
 			pthread_join(threads[t], NULL);
-		else
-			fn(ctx, bands[t].y0, bands[t].y1);
-	}
 }
