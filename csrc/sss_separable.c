@@ -528,25 +528,27 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	table *tables = calloc((size_t)count, sizeof *tables);
 	plane hp = {w, h, {NULL}, NULL, {NULL}, NULL};
 	plane vp = {h, w, {NULL}, NULL, {NULL}, NULL};
-	size_t hn = 3 + (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 7 : 4;
+	size_t hn = 3 + (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 4 : 1;
 	float *hbuf = calloc(npix * hn, sizeof *hbuf);
 	float *vbuf = calloc(npix * vn, sizeof *vbuf);
 	int16_t *vslot = malloc(npix * sizeof *vslot);
 	if (!tables || !hbuf || !vbuf || !vslot)
 		goto done;
 	memset(vslot, 0xff, npix * sizeof *vslot); /* -1: does not scatter */
+	/* The transposed light lives in the job's scratch image. */
+	memset(job->scratch, 0, 3 * npix * sizeof *job->scratch);
 	for (int c = 0; c < 3; c++) {
 		hp.rgb[c] = hbuf + c * npix;
-		vp.rgb[c] = vbuf + c * npix;
+		vp.rgb[c] = job->scratch + c * npix;
 	}
-	vp.z = vbuf + 3 * npix;
+	vp.z = vbuf;
 	vp.slot = vslot;
 	hp.slot = (int16_t *)job->slot;
 	hp.z = copy_z ? hbuf + 3 * npix : (float *)job->depth;
 	if (geo)
 		for (int c = 0; c < 3; c++) {
 			hp.geo[c] = hbuf + (3 + (size_t)copy_z + c) * npix;
-			vp.geo[c] = vbuf + (4 + c) * npix;
+			vp.geo[c] = vbuf + (1 + c) * npix;
 		}
 
 	scan_half_widths(job, ax, tables, count);
