@@ -147,6 +147,132 @@ static void add_plain(float *acc, const sss_image *im, int32_t x, int32_t y)
 		acc[k] += v[k];
 }
 
+/* The per-pixel work before and after the blur, on row chunks in
+ * parallel (sss__parallel_rows): every pixel only reads the passes and
+ * writes its own outputs. */
+typedef struct rows_ctx {
+	const sss_passes *p;
+	const sss_material *materials;
+	const sss__kernel *kernels;
+	const int16_t *by_index;
+	const sss__transmission *transmission;
+	double background_depth;
+	int32_t w;
+	float *signal;
+	int16_t *slot;
+	const sss_image *out_combined, *out_diffuse_light;
+} rows_ctx;
+
+/* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
+ * pre-and-post texturing. Anything non-finite is left out. */
+static void signal_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const rows_ctx *ctx = vctx;
+	const sss_passes *p = ctx->p;
+	const sss__kernel *kernels = ctx->kernels;
+	const int16_t *by_index = ctx->by_index;
+	const sss__transmission *transmission = ctx->transmission;
+	float *signal = ctx->signal;
+	int16_t *slot = ctx->slot;
+	int32_t w = ctx->w;
+	for (int32_t y = y0; y < y1; y++) {
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			float *s = signal + 3 * i;
+			const float *dd = pixel(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
+			                                   : NULL;
+			for (int c = 0; c < 3; c++)
+				s[c] = di ? dd[c] + di[c] : dd[c];
+
+			float index = pixel(&p->index_ma, x, y)[0];
+			float z = pixel(&p->depth, x, y)[0];
+			int16_t k = -1;
+			if (index >= 0.5f && index < 65535.5f)
+				k = by_index[(int32_t)(index + 0.5f)];
+			if (!(z > 0.0f && z < ctx->background_depth))
+				k = -1;
+			if (k >= 0 && p->position.data &&
+			    !sss__isfinite3(pixel(&p->position, x, y)))
+				k = -1;
+			if (k >= 0 && transmission) /* back-lit light, before the blur */
+				sss__transmission_add(transmission, k, x, y, s);
+			if (k >= 0 && kernels[k].texturing ==
+			              SSS_TEXTURING_PRE_AND_POST) {
+				const float *col = pixel(&p->diff_col, x, y);
+				for (int c = 0; c < 3; c++)
+					s[c] *= sqrtf(fmaxf(col[c], 0.0f));
+			}
+			if (k >= 0 && !sss__isfinite3(s))
+				k = -1;
+			slot[i] = k;
+		}
+	}
+}
+
+/* Back to light (contribution = light x DiffCol) and recombine. */
+static void composite_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const rows_ctx *ctx = vctx;
+	const sss_passes *p = ctx->p;
+	const sss_material *materials = ctx->materials;
+	const sss__kernel *kernels = ctx->kernels;
+	const float *signal = ctx->signal;
+	const int16_t *slot = ctx->slot;
+	const sss_image *out_combined = ctx->out_combined;
+	const sss_image *out_diffuse_light = ctx->out_diffuse_light;
+	int32_t w = ctx->w;
+	for (int32_t y = y0; y < y1; y++) {
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			const float *dd = pixel(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
+			                                   : NULL;
+			const float *col = pixel(&p->diff_col, x, y);
+			float light[3];
+			for (int c = 0; c < 3; c++) {
+				float l = di ? dd[c] + di[c] : dd[c];
+				if (slot[i] >= 0 && kernels[slot[i]].mix[c] > 0.0f) {
+					l = signal[3 * i + c];
+					if (kernels[slot[i]].texturing ==
+					    SSS_TEXTURING_PRE_AND_POST) {
+						float root = sqrtf(fmaxf(col[c], 0.0f));
+						l = root > 0.0f ? l / root : (di ? dd[c] + di[c]
+						                                 : dd[c]);
+					}
+				}
+				light[c] = l;
+			}
+			if (slot[i] >= 0) /* energy calibration, at the exit pixel's
+			                     colour (sss_calibration.c) */
+				sss__calibration_apply(&materials[slot[i]], col, light);
+			if (out_diffuse_light) {
+				float *o = out_diffuse_light->data +
+				           y * stride_of(out_diffuse_light) +
+				           (int64_t)x * out_diffuse_light->channels;
+				memcpy(o, light, sizeof light);
+			}
+			if (out_combined) {
+				float acc[3];
+				for (int c = 0; c < 3; c++)
+					acc[c] = light[c] * col[c];
+				add_scaled(acc, &p->gloss_dir, &p->gloss_ind, &p->gloss_col,
+				           x, y);
+				add_scaled(acc, &p->trans_dir, &p->trans_ind, &p->trans_col,
+				           x, y);
+				add_plain(acc, &p->emit, x, y);
+				add_plain(acc, &p->env, x, y);
+				float *o = out_combined->data + y * stride_of(out_combined) +
+				           (int64_t)x * out_combined->channels;
+				memcpy(o, acc, sizeof acc);
+				if (out_combined->channels >= 4)
+					o[3] = p->combined.data ? pixel(&p->combined, x, y)[3]
+					                        : 1.0f;
+			}
+		}
+	}
+}
+
 sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
                      const sss_material *materials, int32_t material_count,
                      const sss_options *user_opt,
@@ -275,41 +401,10 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	};
 	sss__projection_make(cam, w, h, &job.proj, NULL, 0);
 
-	/* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
-	 * pre-and-post texturing. Anything non-finite is left out. */
-	for (int32_t y = 0; y < h; y++) {
-		for (int32_t x = 0; x < w; x++) {
-			size_t i = (size_t)y * w + x;
-			float *s = signal + 3 * i;
-			const float *dd = pixel(&p->diff_dir, x, y);
-			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
-			                                   : NULL;
-			for (int c = 0; c < 3; c++)
-				s[c] = di ? dd[c] + di[c] : dd[c];
-
-			float index = pixel(&p->index_ma, x, y)[0];
-			float z = pixel(&p->depth, x, y)[0];
-			int16_t k = -1;
-			if (index >= 0.5f && index < 65535.5f)
-				k = by_index[(int32_t)(index + 0.5f)];
-			if (!(z > 0.0f && z < opt.background_depth))
-				k = -1;
-			if (k >= 0 && p->position.data &&
-			    !sss__isfinite3(pixel(&p->position, x, y)))
-				k = -1;
-			if (k >= 0 && transmission) /* back-lit light, before the blur */
-				sss__transmission_add(transmission, k, x, y, s);
-			if (k >= 0 && kernels[k].texturing ==
-			              SSS_TEXTURING_PRE_AND_POST) {
-				const float *col = pixel(&p->diff_col, x, y);
-				for (int c = 0; c < 3; c++)
-					s[c] *= sqrtf(fmaxf(col[c], 0.0f));
-			}
-			if (k >= 0 && !sss__isfinite3(s))
-				k = -1;
-			slot[i] = k;
-		}
-	}
+	rows_ctx rc = {p, materials, kernels, by_index, transmission,
+	               opt.background_depth, w, signal, slot, out_combined,
+	               out_diffuse_light};
+	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
 
 	if (material_count > 0) {
 		if (opt.method == SSS_METHOD_REFERENCE)
@@ -328,56 +423,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 			goto done;
 	}
 
-	/* Back to light (contribution = light x DiffCol) and recombine. */
-	for (int32_t y = 0; y < h; y++) {
-		for (int32_t x = 0; x < w; x++) {
-			size_t i = (size_t)y * w + x;
-			const float *dd = pixel(&p->diff_dir, x, y);
-			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
-			                                   : NULL;
-			const float *col = pixel(&p->diff_col, x, y);
-			float light[3];
-			for (int c = 0; c < 3; c++) {
-				float l = di ? dd[c] + di[c] : dd[c];
-				if (slot[i] >= 0 && kernels[slot[i]].mix[c] > 0.0f) {
-					l = signal[3 * i + c];
-					if (kernels[slot[i]].texturing ==
-					    SSS_TEXTURING_PRE_AND_POST) {
-						float root = sqrtf(fmaxf(col[c], 0.0f));
-						l = root > 0.0f ? l / root : (di ? dd[c] + di[c]
-						                                 : dd[c]);
-					}
-				}
-				light[c] = l;
-			}
-			if (slot[i] >= 0) /* energy calibration, at the exit pixel's
-			                     colour (sss_calibration.c) */
-				sss__calibration_apply(&materials[slot[i]], col, light);
-			if (out_diffuse_light) {
-				float *o = out_diffuse_light->data +
-				           y * stride_of(out_diffuse_light) +
-				           (int64_t)x * out_diffuse_light->channels;
-				memcpy(o, light, sizeof light);
-			}
-			if (out_combined) {
-				float acc[3];
-				for (int c = 0; c < 3; c++)
-					acc[c] = light[c] * col[c];
-				add_scaled(acc, &p->gloss_dir, &p->gloss_ind, &p->gloss_col,
-				           x, y);
-				add_scaled(acc, &p->trans_dir, &p->trans_ind, &p->trans_col,
-				           x, y);
-				add_plain(acc, &p->emit, x, y);
-				add_plain(acc, &p->env, x, y);
-				float *o = out_combined->data + y * stride_of(out_combined) +
-				           (int64_t)x * out_combined->channels;
-				memcpy(o, acc, sizeof acc);
-				if (out_combined->channels >= 4)
-					o[3] = p->combined.data ? pixel(&p->combined, x, y)[3]
-					                        : 1.0f;
-			}
-		}
-	}
+	sss__parallel_rows(h, opt.num_threads, composite_rows, &rc);
 	r = SSS_OK;
 done:
 	sss__transmission_free(transmission);
