@@ -26,8 +26,46 @@ AVX2 static inline float lane_sum(__m256 v)
 	return _mm_cvtss_f32(_mm_add_ss(u, _mm_shuffle_ps(u, u, 1)));
 }
 
+/* One vector of samples s .. s + 7 read from the given row pointers
+ * (already offset to sample s), lanes outside `lanes` masked off. */
+#define DENSE_STEP(rgb0, rgb1, rgb2, zp, gx, gy, gz, sp, lanes)                \
+	do {                                                                      \
+		__m256 sf = _mm256_cvtepi32_ps(_mm256_add_epi32(                      \
+			_mm256_set1_epi32(s), iota));                                     \
+		__m256 q;                                                             \
+		if (geo) {                                                            \
+			__m256 dx = _mm256_sub_ps(_mm256_loadu_ps(gx), gcx);              \
+			__m256 dy = _mm256_sub_ps(_mm256_loadu_ps(gy), gcy);              \
+			__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(gz), gcz);              \
+			__m256 xt = _mm256_mul_ps(sf, upp);                               \
+			q = _mm256_sub_ps(                                                \
+				_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),            \
+				                            _mm256_mul_ps(dy, dy)),           \
+				              _mm256_mul_ps(dz, dz)),                         \
+				_mm256_mul_ps(xt, xt));                                       \
+		} else {                                                              \
+			__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(zp), zc);               \
+			__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(    \
+				_mm256_set1_epi32(b->i + s), iota)), off);                    \
+			__m256 e = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);             \
+			__m256 xt2 = _mm256_mul_ps(sf, two_xt);                           \
+			q = _mm256_add_ps(_mm256_mul_ps(e, _mm256_add_ps(e, xt2)),        \
+			                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));      \
+		}                                                                     \
+		q = _mm256_max_ps(q, zero); /* NaN -> 0, as in sss__blur1d_q */       \
+		__m256i slots = _mm256_cvtepi16_epi32(                                \
+			_mm_loadu_si128((const __m128i *)(const void *)(sp)));            \
+		__m256 valid = _mm256_and_ps(                                         \
+			_mm256_castsi256_ps(_mm256_and_si256(                             \
+				_mm256_cmpeq_epi32(slots, slot_c), (lanes))),                  \
+			_mm256_cmp_ps(q, cut, _CMP_LT_OQ));                               \
+		CHANNEL(0, rgb0, acc0, ws0);                                          \
+		CHANNEL(1, rgb1, acc1, ws1);                                          \
+		CHANNEL(2, rgb2, acc2, ws2);                                          \
+	} while (0)
+
 /* One channel's share of a vector of samples. */
-#define CHANNEL(c, acc, ws)                                                   \
+#define CHANNEL(c, rgb, acc, ws)                                              \
 	do {                                                                      \
 		__m256 w0 = _mm256_loadu_ps(b->row0 + (c) * b->stride + s);          \
 		__m256 w1 = _mm256_loadu_ps(b->row1 + (c) * b->stride + s);          \
@@ -39,7 +77,7 @@ AVX2 static inline float lane_sum(__m256 v)
 		__m256 t2 = _mm256_mul_ps(t, t);                                      \
 		__m256 t4 = _mm256_mul_ps(t2, t2);                                    \
 		__m256 wgt = _mm256_mul_ps(w, _mm256_mul_ps(t4, t4));                 \
-		acc = _mm256_add_ps(acc, _mm256_mul_ps(wgt, _mm256_loadu_ps(rgb##c))); \
+		acc = _mm256_add_ps(acc, _mm256_mul_ps(wgt, _mm256_loadu_ps(rgb)));   \
 		ws = _mm256_add_ps(ws, wgt);                                          \
 	} while (0)
 
@@ -49,88 +87,51 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 	const __m256 f = _mm256_set1_ps(b->f), cut = _mm256_set1_ps(b->cut_q);
 	const __m256i slot_c = _mm256_set1_epi32(b->slot_c);
 	const __m256i iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+	const __m256i all = _mm256_set1_epi32(-1);
 	const __m256 zc = _mm256_set1_ps(b->zc), off = _mm256_set1_ps(b->off_axis);
 	const __m256 ife = _mm256_set1_ps(b->ife), two_xt = _mm256_set1_ps(b->two_xt);
 	const __m256 cz = _mm256_set1_ps(b->cz), upp = _mm256_set1_ps(b->upp);
+	const __m256 gcx = _mm256_set1_ps(b->gc[0]), gcy = _mm256_set1_ps(b->gc[1]),
+	             gcz = _mm256_set1_ps(b->gc[2]);
 	const int geo = b->geo[0] != NULL;
+	const float *r0 = b->rgb[0] + b->i, *r1 = b->rgb[1] + b->i,
+	            *r2 = b->rgb[2] + b->i, *zr = geo ? NULL : b->z + b->i;
+	const float *g0 = geo ? b->geo[0] + b->i : NULL,
+	            *g1 = geo ? b->geo[1] + b->i : NULL,
+	            *g2 = geo ? b->geo[2] + b->i : NULL;
+	const int16_t *sr = b->slot + b->i;
 	__m256 acc0 = zero, acc1 = zero, acc2 = zero;
 	__m256 ws0 = zero, ws1 = zero, ws2 = zero;
-	for (int32_t s = b->s_lo; s <= b->s_hi; s += SSS__LANES) {
-		int32_t j = b->i + s;
-		int32_t n = b->s_hi - s + 1;
-		const float *rgb0, *rgb1, *rgb2, *zp = NULL, *gp[3] = {NULL, NULL, NULL};
-		const int16_t *sp;
-		/* A short last vector reads on past the row where the arrays allow
-		 * (the lanes are masked off) and otherwise goes through a padded
-		 * copy: no light, another material. */
-		float stage[7][SSS__LANES];
-		int16_t slot_t[SSS__LANES];
-		if (n >= SSS__LANES || j + SSS__LANES <= b->readable) {
-			rgb0 = b->rgb[0] + j;
-			rgb1 = b->rgb[1] + j;
-			rgb2 = b->rgb[2] + j;
-			sp = b->slot + j;
-			if (geo)
-				for (int c = 0; c < 3; c++)
-					gp[c] = b->geo[c] + j;
-			else
-				zp = b->z + j;
+	int32_t s = b->s_lo;
+	for (; s + SSS__LANES - 1 <= b->s_hi; s += SSS__LANES)
+		DENSE_STEP(r0 + s, r1 + s, r2 + s, geo ? NULL : zr + s,
+		           geo ? g0 + s : NULL, geo ? g1 + s : NULL,
+		           geo ? g2 + s : NULL, sr + s, all);
+	if (s <= b->s_hi) {
+		/* A short last vector reads on past the row where the arrays
+		 * allow (the lanes are masked off) and otherwise goes through a
+		 * padded copy: no light, another material. */
+		int32_t n = b->s_hi - s + 1, j = b->i + s;
+		__m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(n), iota);
+		if (j + SSS__LANES <= b->readable) {
+			DENSE_STEP(r0 + s, r1 + s, r2 + s, geo ? NULL : zr + s,
+			           geo ? g0 + s : NULL, geo ? g1 + s : NULL,
+			           geo ? g2 + s : NULL, sr + s, lanes);
 		} else {
+			float st[7][SSS__LANES];
+			int16_t slot_t[SSS__LANES];
 			for (int l = 0; l < SSS__LANES; l++) {
 				int in = l < n;
 				for (int c = 0; c < 3; c++) {
-					stage[c][l] = in ? b->rgb[c][j + l] : 0.0f;
-					stage[3 + c][l] = in && geo ? b->geo[c][j + l] : b->gc[c];
+					st[c][l] = in ? b->rgb[c][j + l] : 0.0f;
+					st[3 + c][l] = in && geo ? b->geo[c][j + l] : b->gc[c];
 				}
-				stage[6][l] = in && !geo ? b->z[j + l] : b->zc;
+				st[6][l] = in && !geo ? b->z[j + l] : b->zc;
 				slot_t[l] = in ? b->slot[j + l] : (int16_t)-2;
 			}
-			rgb0 = stage[0];
-			rgb1 = stage[1];
-			rgb2 = stage[2];
-			for (int c = 0; c < 3; c++)
-				gp[c] = geo ? stage[3 + c] : NULL;
-			zp = geo ? NULL : stage[6];
-			sp = slot_t;
+			DENSE_STEP(st[0], st[1], st[2], st[6], st[3], st[4], st[5],
+			           slot_t, lanes);
 		}
-
-		__m256 sf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(s),
-		                                                iota));
-		__m256 q;
-		if (geo) {
-			__m256 dx = _mm256_sub_ps(_mm256_loadu_ps(gp[0]),
-			                          _mm256_set1_ps(b->gc[0]));
-			__m256 dy = _mm256_sub_ps(_mm256_loadu_ps(gp[1]),
-			                          _mm256_set1_ps(b->gc[1]));
-			__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(gp[2]),
-			                          _mm256_set1_ps(b->gc[2]));
-			__m256 xt = _mm256_mul_ps(sf, upp);
-			q = _mm256_sub_ps(
-				_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),
-				                            _mm256_mul_ps(dy, dy)),
-				              _mm256_mul_ps(dz, dz)),
-				_mm256_mul_ps(xt, xt));
-		} else {
-			__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(zp), zc);
-			__m256 xs = _mm256_add_ps(
-				_mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(j),
-				                                    iota)), off);
-			__m256 e = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);
-			__m256 xt2 = _mm256_mul_ps(sf, two_xt);
-			q = _mm256_add_ps(_mm256_mul_ps(e, _mm256_add_ps(e, xt2)),
-			                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));
-		}
-		q = _mm256_max_ps(q, zero); /* NaN -> 0, as in sss__blur1d_q */
-		__m256i slots = _mm256_cvtepi16_epi32(
-			_mm_loadu_si128((const __m128i *)(const void *)sp));
-		__m256i in_row = _mm256_cmpgt_epi32(_mm256_set1_epi32(n), iota);
-		__m256 valid = _mm256_and_ps(
-			_mm256_castsi256_ps(_mm256_and_si256(
-				_mm256_cmpeq_epi32(slots, slot_c), in_row)),
-			_mm256_cmp_ps(q, cut, _CMP_LT_OQ));
-		CHANNEL(0, acc0, ws0);
-		CHANNEL(1, acc1, ws1);
-		CHANNEL(2, acc2, ws2);
 	}
 	b->acc[0] = lane_sum(acc0);
 	b->acc[1] = lane_sum(acc1);
