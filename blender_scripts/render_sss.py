@@ -1,7 +1,8 @@
 """Render a .blend with screen-space SSS, headless, from a checkout.
 
     blender -b SCENE.blend --python-exit-code 1 --python blender_scripts/render_sss.py -- \
-        --output OUT.exr [--frames A-B] [--samples N] [--method separable|reference] \
+        --output OUT.exr [--frames A-B] [--samples N] \
+        [--method separable|separable-exact|disk|reference] \
         [--resolution WxH] [--radius-scale F]
 
 Per frame: renders with material SSS switched off (restored afterwards),
@@ -30,7 +31,8 @@ def parse_args():
     p.add_argument("--output", required=True)
     p.add_argument("--frames", help="A-B or A (default: the current frame)")
     p.add_argument("--samples", type=int)
-    p.add_argument("--method", choices=("separable", "reference"))
+    p.add_argument("--method", choices=("separable", "separable-exact", "disk",
+                                          "reference"))
     p.add_argument("--resolution", help="WxH")
     p.add_argument("--radius-scale", type=float)
     args = p.parse_args(argv)
@@ -69,7 +71,7 @@ def main():
             args.resolution
         scene.render.resolution_percentage = 100
     if args.method:
-        scene.sss.method = args.method.upper()
+        scene.sss.method = args.method.upper().replace("-", "_")
     if args.radius_scale is not None:
         scene.sss.radius_scale = args.radius_scale
 
