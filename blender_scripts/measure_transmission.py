@@ -49,6 +49,13 @@ def parse_args():
     p.add_argument("--resolution", default="160x120")
     p.add_argument("--rw-samples", type=int, default=512)
     p.add_argument("--samples", type=int, default=64)
+    p.add_argument("--slab-sweep", default="",
+                   help="thin-slab mode (build_scene.py --kind slab): "
+                   "comma-separated thicknesses in metres, e.g. "
+                   "0.005,0.015,0.04; --scene is the slab .blend")
+    p.add_argument("--slab-subsurface", default="0.02,0.05",
+                   help="slab mode: the Subsurface values (radius factors) "
+                   "to sweep")
     p.add_argument("--model", default="BURLEY",
                    help="transmission model for materials that have it off "
                    "(the add-on's default): BURLEY, JIMENEZ, BEER_LAMBERT, "
@@ -105,8 +112,114 @@ def write_png(path, img):
     out.close()
 
 
+def slab_sweep(args):
+    """Front brightness of the back-lit slab at several thicknesses and
+    radii: random walk against the library (blur alone and with
+    transmission), over the middle of the slab (a quarter of its width on
+    each side left out, so the sides play no part). Also the effective
+    transmittance the random walk shows per channel, (front - blur alone)
+    / (back light x diffuse colour), next to the model's."""
+    from separable_sss import native, pipeline, transmission
+    from separable_sss.switch_off import switched_off
+    import ctypes  # noqa: F401
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    lum = np.array(cm.LUMA)
+    rows = []
+    for sub in [float(v) for v in args.slab_subsurface.split(",")]:
+        for thick in [float(v) for v in args.slab_sweep.split(",")]:
+            tag = f"t{thick:g}_s{sub:g}"
+            means = {}
+            for kind in ("rw", "off"):
+                scene = open_scene(args)
+                slab = scene.objects["Cube"]
+                slab.scale[1] = thick
+                mat = bpy.data.materials["Skin"]
+                bsdf = mat.node_tree.nodes["Principled BSDF"]
+                bsdf.inputs["Subsurface"].default_value = sub
+                bpy.context.view_layer.update()
+                path = os.path.join(work, f"{tag}_{kind}.exr")
+                if kind == "rw":
+                    scene.cycles.samples = args.rw_samples
+                    scene.cycles.seed += REF_SEED_OFFSET
+                    render(scene)
+                    pipeline.save_passes(scene, path)
+                    continue
+                scene.cycles.samples = args.samples
+                found = pipeline.analyse(scene)
+                mat.sss.transmission = args.model
+                with switched_off(scene, found, backlight=True):
+                    render(scene)
+                    pipeline.save_passes(scene, path)
+                    desc = pipeline.scene_description(scene, found)
+            ch = read_exr(os.path.join(work, f"{tag}_off.exr"))
+            idx = np.rint(ch["ViewLayer.IndexMA.X"]) > 0
+            ys, xs = np.nonzero(idx)
+            x0, x1 = xs.min(), xs.max()
+            y0, y1 = ys.min(), ys.max()
+            cx, cy = (x1 - x0) // 4, (y1 - y0) // 4
+            m = np.zeros_like(idx)
+            m[y0 + cy:y1 - cy + 1, x0 + cx:x1 - cx + 1] = True
+            m &= idx
+            ref = rgb(read_exr(os.path.join(work, f"{tag}_rw.exr")),
+                      "ViewLayer.Combined")
+            for on in (False, True):
+                d = json.loads(json.dumps(desc))
+                if not on:
+                    for mm in d["materials"]:
+                        mm["transmission"] = "off"
+                jp = os.path.join(work, f"{tag}_{int(on)}.json")
+                with open(jp, "w") as f:
+                    json.dump(d, f, indent=1)
+                out = os.path.join(work, f"{tag}_sss{int(on)}.exr")
+                with native.Scene(jp) as sc:
+                    sc.process(os.path.join(work, f"{tag}_off.exr"), out,
+                               layer="ViewLayer")
+                means[on] = rgb(read_exr(out), "SSS.Combined")[m].mean(0)
+            b = rgb(ch, f"{transmission.LAYER}.DiffDir") + \
+                rgb(ch, f"{transmission.LAYER}.DiffInd")
+            dc = rgb(ch, "ViewLayer.DiffCol")
+            t_meas = np.sqrt(np.maximum(
+                ch[f"{transmission.LAYER}.{transmission.THICKNESS_AOV}.X"],
+                0.0))[m].mean()
+            bd = (b * dc)[m].mean(0)
+            r = ref[m].mean(0)
+            row = dict(thickness=thick, subsurface=sub,
+                       measured_thickness=float(t_meas),
+                       rw=r.tolist(), off=means[False].tolist(),
+                       model=means[True].tolist(),
+                       rw_lum=float(r @ lum),
+                       off_lum=float(means[False] @ lum),
+                       model_lum=float(means[True] @ lum),
+                       t_rw=((r - means[False]) / bd).tolist(),
+                       t_model=((means[True] - means[False]) / bd).tolist())
+            rows.append(row)
+            print("slab", json.dumps(row), flush=True)
+    lines = ["| thickness (cm) | Subsurface | measured t (cm) | random walk "
+             "| blur alone | model | model / rw | T rw (R, G, B) "
+             "| T model (R, G, B) |", "|" + "---|" * 9]
+    for r in rows:
+        lines.append(
+            f"| {100 * r['thickness']:g} | {r['subsurface']:g} | "
+            f"{100 * r['measured_thickness']:.2f} | {r['rw_lum']:.4f} | "
+            f"{r['off_lum']:.4f} | {r['model_lum']:.4f} | "
+            f"{r['model_lum'] / max(r['rw_lum'], 1e-9):.2f} | " +
+            ", ".join(f"{v:.3f}" for v in r["t_rw"]) + " | " +
+            ", ".join(f"{v:.3f}" for v in r["t_model"]) + " |")
+    text = "\n".join(lines)
+    print(text)
+    with open(os.path.join(args.out, "slab.md"), "w") as f:
+        f.write(text + "\n")
+    with open(os.path.join(args.out, "slab.json"), "w") as f:
+        json.dump(rows, f, indent=1)
+
+
 def main():
     args = parse_args()
+    if args.slab_sweep:
+        os.makedirs(args.out, exist_ok=True)
+        slab_sweep(args)
+        return
     from separable_sss import native, pipeline, transmission
     from separable_sss.switch_off import switched_off
     os.makedirs(args.out, exist_ok=True)

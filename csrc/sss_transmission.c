@@ -12,12 +12,13 @@
  * albedo-consistent maximum of the models below.
  *
  * Models (sss_transmission in sss.h):
- *  - burley: the profile's own transmittance, its mass beyond a plane at
- *    distance t, T(t) = integral_t^inf 2 pi r R(r) dr (Golubev 2018, UE4,
- *    HDRP ComputeTransmittanceDisney). Burley: e^{-t/d}/4 + 3 e^{-t/3d}/4;
- *    a sum of 2-D Gaussians sum w_i G(v_i): sum w_i e^{-t^2 / 2 v_i}. The
- *    d and v_i are exactly those the blur uses, so the glow matches the
- *    blur's reach.
+ *  - burley: for a Burley profile, the share of the light entering the
+ *    back face of a slab of thickness t that leaves by the front, from
+ *    steady-state 1-D diffusion in the slab with the medium Cycles' random
+ *    walk itself uses (see slab_make below). For a sum of 2-D Gaussians
+ *    sum w_i G(v_i) (d'Eon, Jimenez, near/far profiles: no medium behind
+ *    them) the profile's own mass beyond a plane at distance t,
+ *    sum w_i e^{-t^2 / 2 v_i} (Golubev 2018, UE4, HDRP).
  *  - jimenez: Jimenez et al. 2010 (SeparableSSS.h SSSSTransmittance):
  *    d'Eon's skin sum w_i e^{-s^2 / v_i} with s = t 8.25 (1 - translucency)
  *    / sssWidth (sssWidth = the material's jimenez_width).
@@ -47,9 +48,11 @@ typedef struct tmat {
 	int32_t model;          /* sss_transmission; OFF = nothing */
 	double gain[3];         /* strength x colour (Beer-Lambert: strength) */
 	double thickness_scale;
-	/* burley: per channel, Burley d (> 0) or a Gaussian sum */
+	/* burley: per channel, the slab's diffusion (Burley profile, n = 0)
+	 * or a Gaussian sum (n > 0) */
 	int n[3];
 	double d[3];
+	double sigma_tr[3], a[3], zb[3]; /* slab_make */
 	double var[3][SSS_MAX_GAUSSIANS], w[3][SSS_MAX_GAUSSIANS];
 	/* jimenez: s (mm of d'Eon's profile) per scene unit of thickness */
 	double s_per_unit;
@@ -119,6 +122,117 @@ sss_result sss__transmission_validate(const sss_material *mat, char *errbuf,
 
 /* ----------------------------------------------------------------- models */
 
+/* ------------------------------------------- the slab (burley model)
+ *
+ * The medium: Cycles 3.4's random walk (kernel/integrator/
+ * subsurface_random_walk.h, subsurface_random_walk_remap with g = 0, and
+ * kernel/closure/bssrdf.h, bssrdf_setup_radius) turns the surface albedo
+ * A and the radius r of a channel into a homogeneous isotropic medium with
+ * mean free path l = 1 / sigma_t = r sqrt(3 (1 - a')) (a' inverts Jensen's
+ * dipole reflectance at IOR 1.4, as in sss_calibration.c) and
+ * single-scattering albedo alpha(A) (Chiang, Kutz & Burley 2016, the g = 0
+ * coefficients of Cycles' fit). The library's Burley d for that mapping is
+ * l / s(A) (s = 1.9 - A + 3.5 (A - 0.8)^2, Cycles' searchlight fit); for
+ * the other mappings l = d s(A) is the medium with the same d.
+ *
+ * Light that enters the back face is first scattered at depth
+ * z0 = 2 l / 3 (the mean depth of a cosine-distributed first flight) and
+ * diffuses with Grosjean's coefficient D = (2 sigma_a + sigma_s) /
+ * (3 sigma_t^2) = (2 - alpha) l / 3 (as in photon beam diffusion, Habel
+ * et al. 2013), transport coefficient sigma_tr = sqrt(sigma_a / D), and a
+ * matched boundary (the walk leaves wherever it reaches the surface: no
+ * internal reflection) extrapolated by zb = 2 D. The 1-D steady-state
+ * diffusion equation between the extrapolated boundaries, distance
+ * L = t + 2 zb apart, with the source at a = z0 + zb from the entry's,
+ * has the Green's function sinh(sigma_tr x) sinh(sigma_tr (L - a)) /
+ * (sigma_tr D sinh(sigma_tr L)) (x <= a), so of the light that enters, the
+ * front face lets out sinh(sigma_tr a) / sinh(sigma_tr L) and the back face
+ * sinh(sigma_tr (L - a)) / sinh(sigma_tr L) (Ishimaru 1978, ch. 9; the
+ * slab form of Contini et al. 1997). A semi-infinite medium (L -> inf)
+ * returns e^{-sigma_tr a} by the face it entered: that is what the albedo
+ * A stands for once DiffCol multiplies the light, so
+ *
+ *   T(t) = sinh(sigma_tr a) / sinh(sigma_tr L) / e^{-sigma_tr a}
+ *        = (1 - e^{-2 sigma_tr a}) e^{-sigma_tr (L - 2 a)}
+ *          / (1 - e^{-2 sigma_tr L}),          L = max(t + 2 zb, 2 a),
+ *
+ * and a / L without absorption. L >= 2 a (a slab thinner than the source
+ * depth is read as that thick) keeps T <= 1 and non-increasing in t; T(0)
+ * = 1 / (1 + e^{-2 sigma_tr a}) is about 1/2: about half of what enters a
+ * thin part leaves by the face it entered. Against Cycles 3.4's random
+ * walk on a skin slab lit only from behind (measure_transmission.py
+ * --slab-sweep; README, Back-lit transmission) this T is within about 10 %
+ * for every channel from 0.5 to 4 cm and two radii; the profile's mass
+ * beyond t (this model before) was 3-6 times too low. */
+
+/* Cycles' single-scattering albedo for surface albedo A, g = 0. */
+static double rw_alpha(double A)
+{
+	const double ca = 1.8260523782, cb = 4.98511194385 + 0.127355959438,
+	             cc = 1.09686102424, cd = 0.496310210422,
+	             ce = 4.23190299701 + 0.00310603949088,
+	             cf = 2.40602999408;
+	if (!(A > 0.0))
+		return 0.0;
+	if (A > 1.0)
+		A = 1.0;
+	double blend = pow(A, 0.25);
+	double a = (1.0 - blend) * ca * pow(atan(cb * A), cc) +
+	           blend * cd * pow(atan(ce * A), cf);
+	return a < 0.0 ? 0.0 : a > 0.999999 ? 0.999999 : a;
+}
+
+/* Cycles' mean free path over the radius (bssrdf_setup_radius):
+ * sqrt(3 (1 - a')), a' inverting Jensen's dipole reflectance at IOR 1.4. */
+static double rw_mfp_over_radius(double A)
+{
+	const double eta = 1.4;
+	double f_dr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
+	double k = 4.0 / 3.0 * (1.0 + f_dr) / (1.0 - f_dr);
+	if (!(A >= 1e-4)) /* Cycles' limits (bssrdf_dipole_compute_alpha_prime) */
+		return sqrt(3.0);
+	if (A >= 0.995)
+		return sqrt(3.0 * (1.0 - 0.999999));
+	double lo = 0.0, hi = 1.0;
+	for (int i = 0; i < 48; i++) {
+		double mid = 0.5 * (lo + hi);
+		double s = sqrt(3.0 * (1.0 - mid));
+		if (0.5 * mid * (1.0 + exp(-k * s)) * exp(-s) < A)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	return sqrt(3.0 * (1.0 - 0.5 * (lo + hi)));
+}
+
+/* The slab's sigma_tr, a and zb for one channel: mean free path l (scene
+ * units, > 0) and surface albedo A. */
+static void slab_make(double l, double A, double *sigma_tr, double *a,
+                      double *zb)
+{
+	double alpha = rw_alpha(A);
+	double D = (2.0 - alpha) * l / 3.0;
+	*sigma_tr = sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha)) / l;
+	*zb = 2.0 * D;
+	*a = 2.0 * l / 3.0 + *zb;
+}
+
+/* T(t) of the slab above, t >= 0 (+Inf allowed). */
+static double slab_eval(double sigma_tr, double a, double zb, double t)
+{
+	double L = t + 2.0 * zb;
+	if (!(L > 2.0 * a))
+		L = 2.0 * a;
+	if (isinf(L))
+		return 0.0;
+	double x = sigma_tr * L;
+	if (x < 1e-6)
+		return a / L; /* no absorption: the linear flux profile */
+	double y = sigma_tr * a;
+	double T = -expm1(-2.0 * y) * exp(-(x - 2.0 * y)) / -expm1(-2.0 * x);
+	return T < 1.0 ? T : 1.0;
+}
+
 /* len: scene units per metre of profile length (radius_scale/unit_scale). */
 static void tmat_make(const sss_material *mat, const sss_options *opt,
                       double unit_scale, tmat *m)
@@ -143,9 +257,23 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 	m->ambient = mat->transmission_ambient;
 	switch (m->model) {
 	case SSS_TRANSMISSION_BURLEY:
-		for (int c = 0; c < 3; c++)
+		for (int c = 0; c < 3; c++) {
 			m->n[c] = sss__profile_gaussians(mat, opt, unit_scale, c,
 			                                 m->var[c], m->w[c], &m->d[c]);
+			if (m->n[c] != 0 || !(m->d[c] > 0.0))
+				continue;
+			double A = mat->albedo[c];
+			double l = mat->burley_mapping ==
+			           SSS_BURLEY_CYCLES_RANDOM_WALK
+			           ? (double)mat->radius[c] * len *
+			             rw_mfp_over_radius(A)
+			           : m->d[c] * (1.9 - A + 3.5 * (A - 0.8) * (A - 0.8));
+			if (!(l > 0.0) || !isfinite(l)) {
+				m->d[c] = 0.0;
+				continue;
+			}
+			slab_make(l, A, &m->sigma_tr[c], &m->a[c], &m->zb[c]);
+		}
 		break;
 	case SSS_TRANSMISSION_JIMENEZ: {
 		/* s = t 8.25 (1 - translucency) / sssWidth, both lengths in the
@@ -177,9 +305,8 @@ static void tmat_eval(const tmat *m, double t, double facing, double out[3])
 		switch (m->model) {
 		case SSS_TRANSMISSION_BURLEY:
 			if (m->n[c] == 0) {
-				double d = m->d[c];
-				if (d > 0.0)
-					T = 0.25 * exp(-t / d) + 0.75 * exp(-t / (3.0 * d));
+				if (m->d[c] > 0.0)
+					T = slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], t);
 				else
 					T = t == 0.0 ? 1.0 : 0.0;
 			} else {

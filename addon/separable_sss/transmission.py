@@ -137,6 +137,93 @@ def wanted(scene, analysis):
     return True, "lit from behind by " + ", ".join(behind)
 
 
+def _rw_alpha(a):
+    """Cycles' single-scattering albedo for surface albedo a (g = 0);
+    mirror of csrc/sss_transmission.c rw_alpha."""
+    a = min(max(a, 0.0), 1.0)
+    if a <= 0.0:
+        return 0.0
+    b = a ** 0.25
+    al = (1 - b) * 1.8260523782 * math.atan(5.112467903288 * a) ** \
+        1.09686102424 + b * 0.496310210422 * \
+        math.atan(4.2350090365 * a) ** 2.40602999408
+    return min(max(al, 0.0), 0.999999)
+
+
+def slab_transmittance(mfp, albedo, t):
+    """The library's burley-model T(t) for a Burley profile: the 1-D
+    diffusion slab of csrc/sss_transmission.c (slab_make, slab_eval)."""
+    alpha = _rw_alpha(albedo)
+    zb = 2.0 * (2.0 - alpha) * mfp / 3.0
+    a = 2.0 * mfp / 3.0 + zb
+    s = math.sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha)) / mfp
+    big_l = max(t + 2.0 * zb, 2.0 * a)
+    x = s * big_l
+    if x < 1e-6:
+        return a / big_l
+    y = s * a
+    return min(1.0, -math.expm1(-2.0 * y) * math.exp(-(x - 2.0 * y)) /
+               -math.expm1(-2.0 * x))
+
+
+def slab_reach(mfp, albedo, level=0.01):
+    """Thickness (same unit as mfp) where slab_transmittance falls below
+    level; at most 100 mean free paths (a non-absorbing medium falls only
+    as a / L)."""
+    hi = 100.0 * mfp
+    if slab_transmittance(mfp, albedo, hi) >= level:
+        return hi
+    lo = 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if slab_transmittance(mfp, albedo, mid) >= level:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+def _rw_mfp_over_radius(a):
+    """Cycles' mean free path over the radius, sqrt(3 (1 - a')) with a'
+    inverting Jensen's dipole at IOR 1.4 (bssrdf_setup_radius); mirror of
+    csrc/sss_transmission.c rw_mfp_over_radius."""
+    if not a >= 1e-4:
+        return math.sqrt(3.0)
+    if a >= 0.995:
+        return math.sqrt(3.0 * (1.0 - 0.999999))
+    eta = 1.4
+    f_dr = -1.440 / eta ** 2 + 0.710 / eta + 0.668 + 0.0636 * eta
+    k = 4.0 / 3.0 * (1.0 + f_dr) / (1.0 - f_dr)
+    lo, hi = 0.0, 1.0
+    for _ in range(48):
+        mid = 0.5 * (lo + hi)
+        t = math.sqrt(3.0 * (1.0 - mid))
+        if 0.5 * mid * (1.0 + math.exp(-k * t)) * math.exp(-t) < a:
+            lo = mid
+        else:
+            hi = mid
+    return math.sqrt(3.0 * (1.0 - 0.5 * (lo + hi)))
+
+
+def _burley_reach(scene, found):
+    """Metres (before the scene's radius scale): slab_reach over the
+    channels, with the medium the library derives from the material (mean
+    free path l = d s(A), or Cycles' own for cycles-random-walk)."""
+    from .pipeline import _material_entry
+    entry = _material_entry(found)
+    reach = 0.0
+    for r, a in zip(entry["radius"], entry["albedo"]):
+        if entry["mapping"] == "cycles-random-walk":
+            mfp = r * _rw_mfp_over_radius(a)
+        else:
+            d = {"cycles": r / (4 * math.pi), "eevee": r * 0.0459101,
+                 "random-walk": r / (3.5 + 100 * (a - 0.33) ** 4)}
+            mfp = d[entry["mapping"]] * (1.9 - a + 3.5 * (a - 0.8) ** 2)
+        if mfp > 0.0:
+            reach = max(reach, slab_reach(mfp, a))
+    return reach
+
+
 def _len_metres(found, scene):
     """How thick a part can be before its transmittance is negligible
     (< 1 %), in metres: the AO distance must reach that far."""
@@ -144,7 +231,9 @@ def _len_metres(found, scene):
     s = found.material.sss
     scale = scene.sss.radius_scale * s.radius_scale
     if s.transmission == "BURLEY":
-        return support_metres(scene, found)     # 16 d: T < 0.4 %
+        if s.profile in ("BLENDER", "BURLEY"):
+            return _burley_reach(scene, found) * scene.sss.radius_scale
+        return support_metres(scene, found)     # Gaussians: 1e-5 left
     if s.transmission == "JIMENEZ":
         # sum w e^{-s^2/v} < 1 % at s = 5 mm of d'Eon's profile.
         k = 8.25 * (1.0 - s.transmission_translucency)

@@ -87,6 +87,9 @@ def test_backlit_slab_brighter_and_closer_to_random_walk(slab, tmp_path):
           "random walk", ref @ lum)
     assert on @ lum > 2.0 * (off @ lum) + 1e-3
     assert abs(on @ lum - ref @ lum) < abs(off @ lum - ref @ lum)
+    # The diffusion slab lets out about what the random walk does (3-8 %
+    # apart at 64x64 and 256 spp; this render is 40x40 at 16 spp).
+    assert abs(on @ lum - ref @ lum) < 0.4 * (ref @ lum)
 
 
 def test_restored_after_success(slab, tmp_path):
