@@ -116,9 +116,10 @@ def slab_sweep(args):
     """Front brightness of the back-lit slab at several thicknesses and
     radii: random walk against the library (blur alone and with
     transmission), over the middle of the slab (a quarter of its width on
-    each side left out, so the sides play no part). Also the effective
-    transmittance the random walk shows per channel, (front - blur alone)
-    / (back light x diffuse colour), next to the model's."""
+    each side left out, so the sides play no part), per channel and as
+    luminance. Materials with the slab model get their attenuation in the
+    back-light layer's light itself (transmission.py), so the thickness
+    pass reads 0 there."""
     from separable_sss import native, pipeline, transmission
     from separable_sss.switch_off import switched_off
     import ctypes  # noqa: F401
@@ -195,17 +196,17 @@ def slab_sweep(args):
                        t_model=((means[True] - means[False]) / bd).tolist())
             rows.append(row)
             print("slab", json.dumps(row), flush=True)
-    lines = ["| thickness (cm) | Subsurface | measured t (cm) | random walk "
-             "| blur alone | model | model / rw | T rw (R, G, B) "
-             "| T model (R, G, B) |", "|" + "---|" * 9]
+    lines = ["| thickness (cm) | Subsurface | random walk R, G, B (lum.) | "
+             "blur alone (lum.) | model R, G, B (lum.) | model / rw |",
+             "|" + "---|" * 6]
     for r in rows:
         lines.append(
-            f"| {100 * r['thickness']:g} | {r['subsurface']:g} | "
-            f"{100 * r['measured_thickness']:.2f} | {r['rw_lum']:.4f} | "
-            f"{r['off_lum']:.4f} | {r['model_lum']:.4f} | "
-            f"{r['model_lum'] / max(r['rw_lum'], 1e-9):.2f} | " +
-            ", ".join(f"{v:.3f}" for v in r["t_rw"]) + " | " +
-            ", ".join(f"{v:.3f}" for v in r["t_model"]) + " |")
+            f"| {100 * r['thickness']:g} | {r['subsurface']:g} | " +
+            ", ".join(f"{v:.3f}" for v in r["rw"]) +
+            f" ({r['rw_lum']:.3f}) | {r['off_lum']:.3f} | " +
+            ", ".join(f"{v:.3f}" for v in r["model"]) +
+            f" ({r['model_lum']:.3f}) | "
+            f"{r['model_lum'] / max(r['rw_lum'], 1e-9):.2f} |")
     text = "\n".join(lines)
     print(text)
     with open(os.path.join(args.out, "slab.md"), "w") as f:
@@ -237,7 +238,7 @@ def main():
     scene.cycles.samples = args.samples
     found = pipeline.analyse(scene)
     for f in found.found:
-        if f.material.sss.transmission == "OFF":
+        if f.material.sss.transmission in ("OFF", "AUTO"):
             f.material.sss.transmission = args.model
     need, why = transmission.wanted(scene, found)
     times = {}

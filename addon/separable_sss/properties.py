@@ -52,10 +52,13 @@ METHODS = [
 
 
 TRANSMISSION = [
+    ("AUTO", "Auto", "Profile for Random Walk materials (measured "
+     "against Cycles' random walk), off for the others", 5),
     ("OFF", "Off", "No light through thin parts from behind", 0),
-    ("BURLEY", "Profile", "The profile's own transmittance (Burley: "
-     "e^-t/d / 4 + 3 e^-t/3d / 4; Gaussian sums likewise): consistent "
-     "with the blur", 1),
+    ("BURLEY", "Profile", "Burley profiles: the share of the light "
+     "entering the back that leaves by the front, from diffusion in the "
+     "random walk's own medium (per sample, along the real paths); "
+     "Gaussian sums: their mass beyond the thickness", 1),
     ("JIMENEZ", "Jimenez", "Jimenez et al. 2010: d'Eon's skin Gaussians "
      "through s = t 8.25 (1 - translucency) / width", 2),
     ("BEER_LAMBERT", "Beer-Lambert", "The colour seen through the given "
@@ -127,7 +130,7 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
     taps: IntProperty(name="Taps", min=0, max=4097, default=0,
                       description="Taps per 1-D pass, 0 = the scene's")
     transmission: EnumProperty(
-        name="Transmission", items=TRANSMISSION, default="OFF",
+        name="Transmission", items=TRANSMISSION, default="AUTO",
         description="Light through thin parts lit from behind (ears, "
         "fingers, jade, wax, leaves)")
     transmission_strength: FloatProperty(

@@ -51,11 +51,23 @@ MODELS = {"OFF": "off", "BURLEY": "burley", "JIMENEZ": "jimenez",
           "BEER_LAMBERT": "beer-lambert", "FAST": "fast"}
 
 
+def model(found):
+    """The material's transmission model with Auto resolved: Profile for
+    Random Walk materials (Burley profile, as the add-on maps them), off
+    for the others."""
+    s = found.material.sss
+    if s.profile == "NONE":
+        return "OFF"
+    if s.transmission != "AUTO":
+        return s.transmission
+    walk = found.method == "RANDOM_WALK" and s.profile in ("BLENDER",
+                                                           "BURLEY")
+    return "BURLEY" if walk else "OFF"
+
+
 def transmitting(analysis):
     """The found materials whose transmission is on."""
-    return [f for f in analysis.found
-            if f.material.sss.profile != "NONE" and
-            f.material.sss.transmission != "OFF"]
+    return [f for f in analysis.found if model(f) != "OFF"]
 
 
 def _objects_with(scene, material):
@@ -205,20 +217,25 @@ def _rw_mfp_over_radius(a):
     return math.sqrt(3.0 * (1.0 - 0.5 * (lo + hi)))
 
 
+def _mfp(mapping, r, a):
+    """The medium's mean free path (metres) for radius r and albedo a, as
+    the library derives it: Cycles' own for cycles-random-walk, l = d s(A)
+    for the other mappings."""
+    if mapping == "cycles-random-walk":
+        return r * _rw_mfp_over_radius(a)
+    d = {"cycles": r / (4 * math.pi), "eevee": r * 0.0459101,
+         "random-walk": r / (3.5 + 100 * (a - 0.33) ** 4)}[mapping]
+    return d * (1.9 - a + 3.5 * (a - 0.8) ** 2)
+
+
 def _burley_reach(scene, found):
     """Metres (before the scene's radius scale): slab_reach over the
-    channels, with the medium the library derives from the material (mean
-    free path l = d s(A), or Cycles' own for cycles-random-walk)."""
+    channels, with the medium the library derives from the material."""
     from .pipeline import _material_entry
     entry = _material_entry(found)
     reach = 0.0
     for r, a in zip(entry["radius"], entry["albedo"]):
-        if entry["mapping"] == "cycles-random-walk":
-            mfp = r * _rw_mfp_over_radius(a)
-        else:
-            d = {"cycles": r / (4 * math.pi), "eevee": r * 0.0459101,
-                 "random-walk": r / (3.5 + 100 * (a - 0.33) ** 4)}
-            mfp = d[entry["mapping"]] * (1.9 - a + 3.5 * (a - 0.8) ** 2)
+        mfp = _mfp(entry["mapping"], r, a)
         if mfp > 0.0:
             reach = max(reach, slab_reach(mfp, a))
     return reach
@@ -230,18 +247,19 @@ def _len_metres(found, scene):
     from .pipeline import support_metres
     s = found.material.sss
     scale = scene.sss.radius_scale * s.radius_scale
-    if s.transmission == "BURLEY":
+    kind = model(found)
+    if kind == "BURLEY":
         if s.profile in ("BLENDER", "BURLEY"):
             return _burley_reach(scene, found) * scene.sss.radius_scale
         return support_metres(scene, found)     # Gaussians: 1e-5 left
-    if s.transmission == "JIMENEZ":
+    if kind == "JIMENEZ":
         # sum w e^{-s^2/v} < 1 % at s = 5 mm of d'Eon's profile.
         k = 8.25 * (1.0 - s.transmission_translucency)
         if k <= 0.0:
             return support_metres(scene, found)
         width = s.jimenez_width if s.profile == "JIMENEZ" else 0.012
         return 5.0 * width * scale / k
-    if s.transmission == "BEER_LAMBERT":
+    if kind == "BEER_LAMBERT":
         c = max(min(max(s.transmission_color), 0.999), 1e-3)
         return s.transmission_distance * scale * math.log(0.01) / \
             math.log(c)
@@ -262,7 +280,58 @@ def layer_samples(scene):
     return s if s > 0 else max(4, scene.cycles.samples // 4)
 
 
+# Object custom properties the override material reads (Attribute node,
+# type Object); set on the objects for the render and removed after.
+PROP_MODE = "sss_tr_mode"      # 0 absorbs, 1 white translucent, 2 slab
+PROP_SIGMA = "sss_tr_sigma"    # per channel, 1 / scene unit
+PROP_A = "sss_tr_a"            # scene units
+PROP_ZB = "sss_tr_zb"          # scene units
+
+
+def _math(tree, op, a, b=None, clamp=False):
+    node = tree.nodes.new("ShaderNodeMath")
+    node.operation = op
+    node.use_clamp = clamp
+    for i, v in enumerate((a, b)):
+        if v is None:
+            continue
+        if isinstance(v, (int, float)):
+            node.inputs[i].default_value = float(v)
+        else:
+            tree.links.new(v, node.inputs[i])
+    return node.outputs[0]
+
+
+def _slab_ratio(tree, t, sigma, a, zb):
+    """Per channel T(t) / T(0) of the library's diffusion slab
+    (csrc/sss_transmission.c, slab_eval): with L = max(t + 2 zb, 2 a),
+    x = sigma L, y = sigma a: (1 - e^{-4y}) e^{-(x - 2y)} / (1 - e^{-2x}).
+    sigma, a and zb are scalar sockets; returns a scalar socket."""
+    big_l = _math(tree, "MAXIMUM",
+                  _math(tree, "ADD", t, _math(tree, "MULTIPLY", zb, 2.0)),
+                  _math(tree, "MULTIPLY", a, 2.0))
+    x = _math(tree, "MULTIPLY", sigma, big_l)
+    y = _math(tree, "MULTIPLY", sigma, a)
+    num = _math(tree, "SUBTRACT", 1.0,
+                _math(tree, "EXPONENT", _math(tree, "MULTIPLY", y, -4.0)))
+    dec = _math(tree, "EXPONENT", _math(tree, "SUBTRACT",
+                                        _math(tree, "MULTIPLY", y, 2.0), x))
+    den = _math(tree, "SUBTRACT", 1.0,
+                _math(tree, "EXPONENT", _math(tree, "MULTIPLY", x, -2.0)))
+    return _math(tree, "DIVIDE", _math(tree, "MULTIPLY", num, dec), den,
+                 clamp=True)
+
+
 def _override_material(distance, undo):
+    """White translucent everywhere a transmitting object is entered; where
+    a ray inside an object with the slab model (PROP_MODE 2) reaches its
+    surface again, the light that crosses is multiplied per channel by
+    T(t) / T(0) with t = ray length x |N . I| (the slab's thickness along
+    the normal there: exact for a slab, and averaged over the real chords
+    of a curved part by the samples themselves). The library then reads a
+    thickness of 0 there and multiplies by T(0). Objects with no
+    transmitting material absorb (PROP_MODE 0): they cast shadows and end
+    the path instead of passing light on."""
     mat = bpy.data.materials.new(MATERIAL)
     undo.add(lambda: bpy.data.materials.remove(mat))
     mat.use_nodes = True
@@ -272,8 +341,45 @@ def _override_material(distance, undo):
     out = tree.nodes.new("ShaderNodeOutputMaterial")
     out.target = "CYCLES"
     bsdf = tree.nodes.new("ShaderNodeBsdfTranslucent")
-    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
     tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
+
+    def attr(name):
+        node = tree.nodes.new("ShaderNodeAttribute")
+        node.attribute_type = "OBJECT"
+        node.attribute_name = name
+        return node
+
+    mode = attr(PROP_MODE).outputs["Fac"]
+    geo = tree.nodes.new("ShaderNodeNewGeometry")
+    path = tree.nodes.new("ShaderNodeLightPath")
+    dot = tree.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    tree.links.new(geo.outputs["Normal"], dot.inputs[0])
+    tree.links.new(geo.outputs["Incoming"], dot.inputs[1])
+    cos = _math(tree, "ABSOLUTE", dot.outputs["Value"])
+    t = _math(tree, "MULTIPLY", path.outputs["Ray Length"], cos)
+    seps = []
+    for name in (PROP_SIGMA, PROP_A, PROP_ZB):
+        sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+        tree.links.new(attr(name).outputs["Vector"], sep.inputs[0])
+        seps.append(sep)
+    comb = tree.nodes.new("ShaderNodeCombineXYZ")
+    for c in range(3):
+        ratio = _slab_ratio(tree, t, *(sep.outputs[c] for sep in seps))
+        tree.links.new(ratio, comb.inputs[c])
+    # slab = (mode > 1.5) x backfacing: leaving the object's medium
+    slab = _math(tree, "MULTIPLY", _math(tree, "GREATER_THAN", mode, 1.5),
+                 geo.outputs["Backfacing"])
+    pick = tree.nodes.new("ShaderNodeMixRGB")
+    pick.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    tree.links.new(slab, pick.inputs["Fac"])
+    tree.links.new(comb.outputs[0], pick.inputs["Color2"])
+    lit = tree.nodes.new("ShaderNodeMixRGB")
+    lit.inputs["Color1"].default_value = (0.0, 0.0, 0.0, 1.0)
+    tree.links.new(_math(tree, "GREATER_THAN", mode, 0.5), lit.inputs["Fac"])
+    tree.links.new(pick.outputs["Color"], lit.inputs["Color2"])
+    tree.links.new(lit.outputs["Color"], bsdf.inputs["Color"])
+
     ao = tree.nodes.new("ShaderNodeAmbientOcclusion")
     ao.inside = True
     ao.only_local = True
@@ -283,20 +389,85 @@ def _override_material(distance, undo):
     sq.operation = "MULTIPLY"
     sq.inputs[1].default_value = distance * distance
     tree.links.new(ao.outputs["AO"], sq.inputs[0])
+    # The slab objects' attenuation is in the light already: thickness 0.
+    keep = _math(tree, "LESS_THAN", mode, 1.5)
     aov = tree.nodes.new("ShaderNodeOutputAOV")
     aov.name = THICKNESS_AOV        # in 3.4 the node's name is its AOV
-    tree.links.new(sq.outputs[0], aov.inputs["Value"])
-    geo = tree.nodes.new("ShaderNodeNewGeometry")
-    dot = tree.nodes.new("ShaderNodeVectorMath")
-    dot.operation = "DOT_PRODUCT"
-    tree.links.new(geo.outputs["Normal"], dot.inputs[0])
-    tree.links.new(geo.outputs["Incoming"], dot.inputs[1])
+    tree.links.new(_math(tree, "MULTIPLY", sq.outputs[0], keep),
+                   aov.inputs["Value"])
     facing = tree.nodes.new("ShaderNodeOutputAOV")
     facing.name = FACING_AOV
     tree.links.new(dot.outputs["Value"], facing.inputs["Value"])
     for node in tree.nodes:
         node.label = TAG
     return mat
+
+
+def _slab_params(scene, found):
+    """(sigma_tr, a, zb) per channel in scene units for a material whose
+    transmission is the slab (the burley model on a Burley profile), after
+    its thickness scale; None otherwise (or when it lets nothing through
+    or everything: thickness scale 0)."""
+    s = found.material.sss
+    if model(found) != "BURLEY" or s.profile not in ("BLENDER", "BURLEY"):
+        return None
+    k = s.thickness_scale
+    if not k > 0.0:
+        return None
+    from .pipeline import _material_entry
+    entry = _material_entry(found)
+    unit = scene.unit_settings.scale_length or 1.0
+    length = scene.sss.radius_scale / unit
+    out = ([], [], [])
+    for r, alb in zip(entry["radius"], entry["albedo"]):
+        mfp = _mfp(entry["mapping"], r, alb) * length
+        if not mfp > 0.0:
+            return None
+        alpha = _rw_alpha(alb)
+        zb = 2.0 * (2.0 - alpha) * mfp / 3.0
+        a = 2.0 * mfp / 3.0 + zb
+        sigma = math.sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha)) / mfp
+        sigma = max(sigma, 1e-3 / a)    # keeps the shader's 0/0 away
+        # T(k t) with (sigma, a, zb) is T(t) with (sigma k, a / k, zb / k)
+        out[0].append(sigma * k)
+        out[1].append(a / k)
+        out[2].append(zb / k)
+    return out
+
+
+def _tag_objects(scene, analysis, undo):
+    """Sets PROP_* on every object the layer renders: 2 for objects with a
+    slab-model material, 1 for other transmitting ones, 0 for the rest."""
+    params = {}
+    for f in transmitting(analysis):
+        params[f.material] = _slab_params(scene, f)
+    for obj in scene.objects:
+        if not hasattr(obj, "material_slots") or obj.type not in (
+                "MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES",
+                "POINTCLOUD", "VOLUME"):
+            continue
+        mode, values = 0, None
+        for slot in obj.material_slots:
+            if slot.material in params:
+                p = params[slot.material]
+                if p is not None:
+                    mode, values = 2, p
+                    break
+                mode = 1
+        had = {k: obj.get(k) for k in (PROP_MODE, PROP_SIGMA, PROP_A,
+                                       PROP_ZB) if k in obj}
+
+        def restore(obj=obj, had=had):
+            for k in (PROP_MODE, PROP_SIGMA, PROP_A, PROP_ZB):
+                if k in obj:
+                    del obj[k]
+            for k, v in had.items():
+                obj[k] = v
+        undo.add(restore)
+        obj[PROP_MODE] = float(mode)
+        if values is not None:
+            obj[PROP_SIGMA], obj[PROP_A], obj[PROP_ZB] = \
+                [list(map(float, v)) for v in values]
 
 
 def _copy_collections(src, dst):
@@ -327,6 +498,7 @@ def add_layer(scene, analysis, undo, source_layer=None):
     undo.add(lambda: scene.view_layers.remove(layer))
     if source is not None and source.name in scene.view_layers:
         _copy_collections(source.layer_collection, layer.layer_collection)
+    _tag_objects(scene, analysis, undo)
     layer.material_override = mat
     undo.add(lambda: setattr(layer, "material_override", None))
     layer.samples = layer_samples(scene)
@@ -343,10 +515,11 @@ def add_layer(scene, analysis, undo, source_layer=None):
 def material_fields(found):
     """The scene-description keys of a material's transmission."""
     s = found.material.sss
-    if s.transmission == "OFF":
+    kind = model(found)
+    if kind == "OFF":
         return {"transmission": "off"}
     return {
-        "transmission": MODELS[s.transmission],
+        "transmission": MODELS[kind],
         "transmission_strength": s.transmission_strength,
         "transmission_color": [min(max(float(c), 0.0), 1.0)
                                for c in s.transmission_color],

@@ -109,6 +109,10 @@ def _draw_transmission(layout, context, s, split):
     _prop(col, s, "transmission", split)
     if s.transmission == 'OFF':
         return
+    if s.transmission == 'AUTO':
+        _wrapped(col, context, "Auto: the Profile model for Random Walk "
+                 "materials (measured against Cycles' random walk), off "
+                 "for the others", 'INFO')
     col.prop(s, "transmission_strength", slider=True)
     col.prop(s, "transmission_color")
     if s.transmission == 'JIMENEZ':
