@@ -1,0 +1,76 @@
+"""The benchmark's parts, on tiny sizes, so that `make bench` does not rot:
+the C driver prints its CSV line for every method, dumps what the
+end-to-end and Blender comparisons read, and the frame it makes from that
+dump is one the `sss` command processes. No timing is asserted."""
+import csv
+import importlib.util
+import io
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import BUILD, ROOT, run
+
+BENCH = BUILD / "sss-bench"
+
+
+def load_driver():
+    spec = importlib.util.spec_from_file_location(
+        "run_bench", ROOT / "bench" / "run_bench.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def bench():
+    if not BENCH.exists():
+        pytest.fail(f"{BENCH} is missing: run make first")
+    return str(BENCH)
+
+
+@pytest.mark.parametrize("method", ["separable", "separable-exact", "disk",
+                                    "reference"])
+def test_csv_line(bench, method):
+    out = subprocess.run([bench, "--size", "40", "30", "--radius", "4",
+                          "--coverage", "0.5", "--method", method,
+                          "--repeat", "1", "--header"],
+                         capture_output=True, text=True, check=True).stdout
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert len(rows) == 1
+    row = rows[0]
+    assert row["method"] == method
+    assert (int(row["width"]), int(row["height"])) == (40, 30)
+    assert 0.3 < float(row["coverage"]) < 0.7
+    assert float(row["seconds"]) > 0
+    assert float(row["rss_peak_mib"]) >= float(row["rss_inputs_mib"]) > 0
+
+
+def test_bad_arguments(bench):
+    proc = subprocess.run([bench, "--method", "nonsense"], capture_output=True,
+                          text=True)
+    assert proc.returncode == 2 and "nonsense" in proc.stderr
+    proc = subprocess.run([bench, "--coverage", "0"], capture_output=True,
+                          text=True)
+    assert proc.returncode == 2 and "usage" in proc.stderr
+
+
+def test_dump_makes_a_frame_sss_processes(bench, sss_cmd, tmp_path):
+    w, h = 48, 32
+    prefix = str(tmp_path / "f")
+    subprocess.run([bench, "--size", str(w), str(h), "--radius", "6",
+                    "--repeat", "1", "--dump", prefix], check=True,
+                   capture_output=True)
+    light = np.fromfile(prefix + "_light.f32", np.float32)
+    assert light.size == 3 * w * h and np.isfinite(light).all()
+    depth = np.fromfile(prefix + "_depth.f32", np.float32)
+    assert depth.size == w * h and (depth > 0).all()
+    driver = load_driver()
+    frame = tmp_path / "frame.exr"
+    channels = driver.frame_from_dump(prefix, w, h, str(frame))
+    assert channels == 39
+    out = tmp_path / "out.exr"
+    proc = run(sss_cmd, frame, "-o", out, "--scene", prefix + "_scene.json",
+               check=0)
+    assert "sss" in proc.stdout and out.exists()
