@@ -485,10 +485,15 @@ def _tag_objects(scene, analysis, undo):
             for k, v in had.items():
                 obj[k] = v
         undo.add(restore)
-        obj[PROP_MODE] = float(mode)
-        if values is not None:
-            obj[PROP_SIGMA], obj[PROP_A], obj[PROP_ZB] = \
-                [list(map(float, v)) for v in values]
+        try:
+            obj[PROP_MODE] = float(mode)
+            if values is not None:
+                obj[PROP_SIGMA], obj[PROP_A], obj[PROP_ZB] = \
+                    [list(map(float, v)) for v in values]
+        except (TypeError, AttributeError, RuntimeError):
+            # A linked, non-editable object: it reads mode 0 (absorbs) in
+            # the layer, so it casts shadows but lets no light through.
+            pass
 
 
 def _copy_collections(src, dst):

@@ -137,3 +137,38 @@ def test_existing_layer_name_is_a_clear_error(slab, tmp_path):
     with pytest.raises(Exception, match=transmission.LAYER):
         pipeline.prepare_render(bpy.context)
     assert state(scene)["layers"] == before["layers"]
+
+
+def test_auto_is_profile_for_random_walk(slab, tmp_path):
+    scene = open_scene(slab, tmp_path)
+    mat = bpy.data.materials["Skin"]
+    mat.sss.transmission = "AUTO"
+    found = pipeline.analyse(scene).found
+    assert [transmission.model(f) for f in found] == ["BURLEY"]
+    assert transmission.wanted(scene, pipeline.analyse(scene))[0]
+    node = mat.node_tree.nodes["Principled BSDF"]
+    node.subsurface_method = "BURLEY"
+    found = pipeline.analyse(scene).found
+    assert [transmission.model(f) for f in found] == ["OFF"]
+    assert not transmission.wanted(scene, pipeline.analyse(scene))[0]
+
+
+def test_slab_objects_tagged_only_during_render(slab, tmp_path):
+    scene = open_scene(slab, tmp_path)
+    seen = {}
+
+    def grab(scene_, *args):
+        for obj in scene_.objects:
+            if transmission.PROP_MODE in obj:
+                seen[obj.name] = (obj[transmission.PROP_MODE],
+                                  list(obj.get(transmission.PROP_SIGMA,
+                                               [])))
+    bpy.app.handlers.render_pre.append(grab)
+    try:
+        pipeline.prepare_render(bpy.context)
+    finally:
+        bpy.app.handlers.render_pre.remove(grab)
+    # The slab carries the medium; nothing is left on it afterwards.
+    assert seen["Cube"][0] == 2.0 and len(seen["Cube"][1]) == 3
+    assert all(s > 0 for s in seen["Cube"][1])
+    assert all(transmission.PROP_MODE not in o for o in scene.objects)
