@@ -223,10 +223,13 @@ enum sss_texturing {
  * Thickness NaN or negative means "unknown": nothing is added there. */
 enum sss_transmission {
 	SSS_TRANSMISSION_OFF = 0,
-	SSS_TRANSMISSION_BURLEY = 1,  /* the profile's own transmittance: its
-	                                 mass beyond a plane at distance t.
-	                                 Burley: e^{-t/d}/4 + 3 e^{-t/3d}/4;
-	                                 Gaussian sums: sum w_i e^{-t^2/2v_i};
+	SSS_TRANSMISSION_BURLEY = 1,  /* the profile's own medium. Burley: 1-D
+	                                 diffusion through a slab of thickness
+	                                 t in Cycles' random-walk medium (the
+	                                 share leaving by the far face; about
+	                                 1/2 at t = 0, see sss_transmission.c);
+	                                 Gaussian sums: their mass beyond a
+	                                 plane at t, sum w_i e^{-t^2/2v_i};
 	                                 times transmission_color */
 	SSS_TRANSMISSION_JIMENEZ = 2, /* Jimenez et al. 2010: d'Eon's skin
 	                                 sum w_i e^{-s^2/v_i}, s (mm) = t x 8.25
