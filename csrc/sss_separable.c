@@ -380,6 +380,14 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in, *out = &ctx->out;
 	int32_t w = job->width, h = job->height;
+	/* This chunk's rows are a segment of every transposed row: no light,
+	 * no material until a scattering pixel says otherwise. */
+	for (int32_t x = 0; x < w; x++) {
+		size_t o = (size_t)x * h + y0, n = (size_t)(y1 - y0);
+		for (int c = 0; c < 3; c++)
+			memset(out->rgb[c] + o, 0, n * sizeof(float));
+		memset(out->slot + o, 0xff, n * sizeof *out->slot); /* -1 */
+	}
 	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
 		int32_t ye = yb + BLOCK < y1 ? yb + BLOCK : y1;
 		for (int32_t x = 0; x < w; x++)
@@ -475,34 +483,83 @@ static void second_rows(void *vctx, int32_t x0, int32_t x1)
 	free(mem);
 }
 
-/* The half-widths that dense rows must cover, per kernel, both axes. */
-static void scan_half_widths(const sss__job *job, const axis ax[2],
-                             table *tables, int32_t count)
+/* The depth range of each kernel's pixels, over STRIPES stripes of rows
+ * in parallel; a kernel's half-width falls as depth grows, so this bounds
+ * the half-widths its dense rows must cover. */
+#define STRIPES 32
+
+typedef struct scan_ctx {
+	const sss__job *job;
+	int32_t count;
+	float *zr; /* [stripe][kernel][min, max] */
+} scan_ctx;
+
+static void scan_stripes(void *vctx, int32_t s0, int32_t s1)
 {
-	for (int32_t m = 0; m < count; m++) {
-		tables[m].r_min = INFINITY;
-		tables[m].r_max = -INFINITY;
-	}
-	for (int32_t y = 0; y < job->height; y++)
-		for (int32_t x = 0; x < job->width; x++) {
-			int16_t slot = job->slot[(size_t)y * job->width + x];
-			if (slot < 0)
-				continue;
-			const sss__kernel *k = &job->kernels[slot];
-			table *t = &tables[slot];
-			double z = job->depth[y * job->depth_stride +
-			                      (int64_t)x * job->depth_channels];
-			for (int a = 0; a < 2; a++) {
-				int capped;
-				int32_t len = a ? job->height : job->width;
-				double r = half_width(job, k, &ax[a], len, z, &capped);
-				int32_t half = (k->taps - 1) / 2;
-				if (capped || !(r >= 1.0) || !(r < half + 0.5))
-					continue;
-				t->r_min = fmin(t->r_min, r);
-				t->r_max = fmax(t->r_max, r);
-			}
+	const scan_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	for (int32_t st = s0; st < s1; st++) {
+		float *zr = ctx->zr + (size_t)st * ctx->count * 2;
+		for (int32_t m = 0; m < ctx->count; m++) {
+			zr[2 * m] = INFINITY;
+			zr[2 * m + 1] = -INFINITY;
 		}
+		int32_t y0 = (int32_t)((int64_t)job->height * st / STRIPES);
+		int32_t y1 = (int32_t)((int64_t)job->height * (st + 1) / STRIPES);
+		for (int32_t y = y0; y < y1; y++)
+			for (int32_t x = 0; x < job->width; x++) {
+				int16_t slot = job->slot[(size_t)y * job->width + x];
+				if (slot < 0)
+					continue;
+				float z = job->depth[y * job->depth_stride +
+				                     (int64_t)x * job->depth_channels];
+				zr[2 * slot] = z < zr[2 * slot] ? z : zr[2 * slot];
+				zr[2 * slot + 1] = z > zr[2 * slot + 1] ? z : zr[2 * slot + 1];
+			}
+	}
+}
+
+/* The half-widths that dense rows must cover, per kernel, both axes. */
+static sss_result scan_half_widths(const sss__job *job, const axis ax[2],
+                                   table *tables, int32_t count,
+                                   int32_t num_threads)
+{
+	scan_ctx ctx = {job, count, malloc((size_t)STRIPES * count * 2 *
+	                                   sizeof(float))};
+	if (!ctx.zr)
+		return SSS_ERR_OUT_OF_MEMORY;
+	sss__parallel_rows(STRIPES, num_threads, scan_stripes, &ctx);
+	for (int32_t m = 0; m < count; m++) {
+		table *t = &tables[m];
+		const sss__kernel *k = &job->kernels[m];
+		float zmin = INFINITY, zmax = -INFINITY;
+		for (int32_t st = 0; st < STRIPES; st++) {
+			const float *zr = ctx.zr + ((size_t)st * count + m) * 2;
+			zmin = zr[0] < zmin ? zr[0] : zmin;
+			zmax = zr[1] > zmax ? zr[1] : zmax;
+		}
+		t->r_min = INFINITY;
+		t->r_max = -INFINITY;
+		if (!(zmin <= zmax) || !(k->support > 0.0))
+			continue;
+		int32_t half = (k->taps - 1) / 2;
+		for (int a = 0; a < 2; a++) {
+			int32_t len = a ? job->height : job->width;
+			int capped_near, capped_far;
+			double r_near = half_width(job, k, &ax[a], len, zmin, &capped_near);
+			double r_far = half_width(job, k, &ax[a], len, zmax, &capped_far);
+			/* Dense pixels are the uncapped ones in [1, half + 0.5). */
+			double hi = capped_near ? fmin(job->max_support_px, len) : r_near;
+			double lo = r_far < 1.0 ? 1.0 : r_far;
+			hi = hi < half + 0.5 ? hi : half + 0.5;
+			if (!(lo <= hi))
+				continue;
+			t->r_min = fmin(t->r_min, lo);
+			t->r_max = fmax(t->r_max, hi);
+		}
+	}
+	free(ctx.zr);
+	return SSS_OK;
 }
 
 sss_result sss__separable(const sss__job *job, int32_t num_threads)
@@ -534,9 +591,8 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	int16_t *vslot = malloc(npix * sizeof *vslot);
 	if (!tables || !hbuf || !vbuf || !vslot)
 		goto done;
-	memset(vslot, 0xff, npix * sizeof *vslot); /* -1: does not scatter */
-	/* The transposed light lives in the job's scratch image. */
-	memset(job->scratch, 0, 3 * npix * sizeof *job->scratch);
+	/* The transposed light lives in the job's scratch image (fill_rows
+	 * clears it). */
 	for (int c = 0; c < 3; c++) {
 		hp.rgb[c] = hbuf + c * npix;
 		vp.rgb[c] = job->scratch + c * npix;
@@ -551,7 +607,9 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 			vp.geo[c] = vbuf + (1 + c) * npix;
 		}
 
-	scan_half_widths(job, ax, tables, count);
+	if ((r = scan_half_widths(job, ax, tables, count, num_threads)))
+		goto done;
+	r = SSS_ERR_OUT_OF_MEMORY;
 	for (int32_t m = 0; m < count; m++)
 		if (job->kernels[m].support > 0.0 &&
 		    (r = table_build(&job->kernels[m], &tables[m])))
