@@ -25,9 +25,12 @@ def main():
     pixels = inp.read_image(oiio.FLOAT)
     inp.close()
     names = list(spec.channelnames)
+    # The render's own layer: not our SSS output, and not the back-light
+    # layer the add-on renders for transmission (SSSBackLight).
     layer = sys.argv[3] if len(sys.argv) > 3 else next(
         n.split(".")[0] for n in names
-        if n.endswith(".DiffDir.R") and not n.startswith("SSS."))
+        if n.endswith(".DiffDir.R") and n.split(".")[0] not in
+        ("SSS", "SSSBackLight"))
 
     def rgb(prefix):
         return np.stack([pixels[:, :, names.index(f"{prefix}.{c}")]
