@@ -413,71 +413,43 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 	}
 }
 
-/* First pass, rows y0..y1 of the image: blurs along x into the transposed
- * plane. */
-static void first_rows(void *vctx, int32_t y0, int32_t y1)
-{
-	const pass_ctx *ctx = vctx;
-	const sss__job *job = ctx->job;
-	const plane *in = &ctx->in, *out = &ctx->out;
-	int32_t w = job->width, h = job->height;
-	scratch sc;
-	void *mem = scratch_new(&sc, ctx->half_max);
-	if (!mem) {
-		atomic_store(ctx->failed, 1);
-		return;
-	}
-	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
-		int32_t ye = yb + BLOCK < y1 ? yb + BLOCK : y1;
-		sss__blur1d rows[BLOCK];
-		for (int32_t y = yb; y < ye; y++)
-			row_template(ctx, y, &rows[y - yb]);
-		for (int32_t x = 0; x < w; x++)
-			for (int32_t y = yb; y < ye; y++) {
-				size_t i = (size_t)y * w + x, o = (size_t)x * h + y;
-				float b[3];
-				if (job->slot[i] < 0)
-					continue;
-				if (!blur_pixel(ctx, &rows[y - yb], x, &sc, b))
-					for (int c = 0; c < 3; c++)
-						b[c] = in->rgb[c][i];
-				for (int c = 0; c < 3; c++)
-					out->rgb[c][o] = b[c];
-			}
-	}
-	free(mem);
-}
-
-/* Second pass, image columns x0..x1 (rows of the transposed plane): blurs
- * along y and blends into the job's signal. */
-static void second_rows(void *vctx, int32_t x0, int32_t x1)
+/* One pass over rows r0..r1 of ctx->in, in blocks of BLOCK rows. The pixel
+ * at position p of row r sits at p * rows + r in the other orientation:
+ * the first pass stores its result there (the transposed plane), the
+ * second blends it into the job's signal (back in image order). */
+static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 {
 	const pass_ctx *ctx = vctx;
 	const sss__job *job = ctx->job;
 	const plane *in = &ctx->in;
-	int32_t w = job->width, h = job->height;
+	int32_t len = in->len, rows = in->rows;
 	scratch sc;
 	void *mem = scratch_new(&sc, ctx->half_max);
 	if (!mem) {
 		atomic_store(ctx->failed, 1);
 		return;
 	}
-	for (int32_t xb = x0; xb < x1; xb += BLOCK) {
-		int32_t xe = xb + BLOCK < x1 ? xb + BLOCK : x1;
-		sss__blur1d rows[BLOCK];
-		for (int32_t x = xb; x < xe; x++)
-			row_template(ctx, x, &rows[x - xb]);
-		for (int32_t y = 0; y < h; y++)
-			for (int32_t x = xb; x < xe; x++) {
-				int16_t slot = in->slot[(size_t)x * h + y];
+	for (int32_t rb = r0; rb < r1; rb += BLOCK) {
+		int32_t re = rb + BLOCK < r1 ? rb + BLOCK : r1;
+		sss__blur1d tpl[BLOCK];
+		for (int32_t r = rb; r < re; r++)
+			row_template(ctx, r, &tpl[r - rb]);
+		for (int32_t pos = 0; pos < len; pos++)
+			for (int32_t r = rb; r < re; r++) {
+				size_t i = (size_t)r * len + pos, o = (size_t)pos * rows + r;
+				int16_t slot = in->slot[i];
 				if (slot < 0)
 					continue;
 				float b[3];
-				if (!blur_pixel(ctx, &rows[x - xb], y, &sc, b))
+				if (!blur_pixel(ctx, &tpl[r - rb], pos, &sc, b))
 					for (int c = 0; c < 3; c++)
-						b[c] = in->rgb[c][(size_t)x * h + y];
-				sss__blend_pixel(&job->kernels[slot], b,
-				                 job->signal + 3 * ((size_t)y * w + x));
+						b[c] = in->rgb[c][i];
+				if (ctx->first)
+					for (int c = 0; c < 3; c++)
+						ctx->out.rgb[c][o] = b[c];
+				else
+					sss__blend_pixel(&job->kernels[slot], b,
+					                 job->signal + 3 * o);
 			}
 	}
 	free(mem);
@@ -625,10 +597,10 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	atomic_int failed = 0;
 	pass_ctx first = {job, tables, hp, vp, ax[0], 1, avx2, half_max, &failed};
 	sss__parallel_rows(h, num_threads, fill_rows, &first);
-	sss__parallel_rows(h, num_threads, first_rows, &first);
+	sss__parallel_rows(h, num_threads, pass_rows, &first);
 	pass_ctx second = {job, tables, vp, hp, ax[1], 0, avx2, half_max, &failed};
 	if (!atomic_load(&failed))
-		sss__parallel_rows(w, num_threads, second_rows, &second);
+		sss__parallel_rows(w, num_threads, pass_rows, &second);
 	r = atomic_load(&failed) ? SSS_ERR_OUT_OF_MEMORY : SSS_OK;
 done:
 	if (tables)
