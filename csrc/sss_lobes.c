@@ -261,40 +261,7 @@ static void lobes_build(const sss_material *mat, const sss_options *opt,
 
 /* ------------------------------------------------------------ the blur */
 
-typedef struct tap {
-	double offset;  /* pixels from the centre */
-	double lo, hi;  /* the tap's cell along the axis, pixels */
-} tap;
-
-/* As the separable method lays its taps out: every pixel under a kernel
- * of half-width r if they fit in the budget, else `taps` taps with
- * Jimenez's quadratic spacing and midpoint cells (read with linear
- * interpolation). Returns the number of taps right of the centre. */
-static int32_t tap_layout(int32_t taps, double r, tap *t)
-{
-	int32_t half_taps = (taps - 1) / 2;
-	int32_t dense = (int32_t)(r + 0.5);
-	t[0] = (tap){0.0, -0.5, 0.5};
-	if (half_taps == 0 || dense <= 0)
-		return 0;
-	if (dense <= half_taps) {
-		for (int32_t i = 1; i <= dense; i++)
-			t[i] = (tap){i, i - 0.5, i + 0.5};
-		return dense;
-	}
-	double inv_h = 1.0 / half_taps;
-	for (int32_t i = 0; i <= half_taps; i++)
-		t[i].offset = r * (i * inv_h) * (i * inv_h);
-	for (int32_t i = 0; i <= half_taps; i++) {
-		double prev = i ? t[i - 1].offset : -t[1].offset;
-		double next = i < half_taps ? t[i + 1].offset : t[i].offset;
-		t[i].lo = 0.5 * (prev + t[i].offset);
-		t[i].hi = 0.5 * (t[i].offset + next);
-	}
-	return half_taps;
-}
-
-#define MAX_HALF_TAPS 2048
+#define MAX_HALF_TAPS SSS__MAX_HALF_TAPS
 
 /* The standard normal CDF minus 1/2, tabulated on [0, PHI_MAX] once per
  * call (linear interpolation: error below 1e-8; beyond 8 sigma the tail is
@@ -377,8 +344,8 @@ static void lobe_pixel(const pass_ctx *ctx, int16_t slot, int32_t x,
 
 	/* a[0..2]: weighted sums, a[3..5]: weight sums. */
 	double a[6] = {0, 0, 0, 0, 0, 0}, m[3];
-	tap t[MAX_HALF_TAPS + 1];
-	int32_t n = tap_layout(k->taps, r, t);
+	sss__tap t[MAX_HALF_TAPS + 1]; /* the separable method's layout */
+	int32_t n = sss__tap_layout(k->taps, r, t);
 	double upp = 1.0 / ppu;
 	cell_mass(ctx->phi, L, t[0].lo * upp, t[0].hi * upp, m);
 	const float *src = vert ? ctx->h + 6 * i : job->signal + 3 * i;
