@@ -9,22 +9,9 @@
 
 #define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
-static int64_t stride_of(const sss_image *im)
-{
-	return im->row_stride ? im->row_stride
-	                      : (int64_t)im->width * im->channels;
-}
-
-static const float *pixel(const sss_image *im, int32_t x, int32_t y)
-{
-	return im->data + y * stride_of(im) + (int64_t)x * im->channels;
-}
-
-/* Checks one pass view against the reference size; absent optional passes
- * (data == NULL) are fine. */
-static sss_result check_image(const char *name, const sss_image *im,
-                              int32_t min_channels, int required, int32_t w,
-                              int32_t h, char *errbuf, size_t errbuf_len)
+sss_result sss__check_image(const char *name, const sss_image *im,
+                            int32_t min_channels, int required, int32_t w,
+                            int32_t h, char *errbuf, size_t errbuf_len)
 {
 	if (!im->data) {
 		if (required)
@@ -49,14 +36,6 @@ static sss_result check_image(const char *name, const sss_image *im,
 	return SSS_OK;
 }
 
-/* Byte range an image view touches, for the aliasing check. */
-static void image_span(const sss_image *im, const char **lo, const char **hi)
-{
-	*lo = (const char *)im->data;
-	*hi = (const char *)(im->data + (im->height - 1) * stride_of(im) +
-	                     (int64_t)im->width * im->channels);
-}
-
 static sss_result check_output(const char *name, const sss_image *out,
                                const sss_passes *p, int32_t w, int32_t h,
                                char *errbuf, size_t errbuf_len)
@@ -65,7 +44,7 @@ static sss_result check_output(const char *name, const sss_image *out,
 		return SSS_OK;
 	if (!out->data)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "output %s has no data", name);
-	sss_result r = check_image(name, out, 3, 1, w, h, errbuf, errbuf_len);
+	sss_result r = sss__check_image(name, out, 3, 1, w, h, errbuf, errbuf_len);
 	if (r)
 		return r;
 	const sss_image *inputs[] = {
@@ -75,12 +54,12 @@ static sss_result check_output(const char *name, const sss_image *out,
 		&p->index_ma, &p->position,
 	};
 	const char *olo, *ohi;
-	image_span(out, &olo, &ohi);
+	sss__span(out, &olo, &ohi);
 	for (size_t i = 0; i < sizeof inputs / sizeof *inputs; i++) {
 		if (!inputs[i]->data)
 			continue;
 		const char *lo, *hi;
-		image_span(inputs[i], &lo, &hi);
+		sss__span(inputs[i], &lo, &hi);
 		if (olo < hi && lo < ohi)
 			return FAILX(SSS_ERR_INVALID_ARGUMENT, "output %s overlaps an "
 			             "input pass; inputs are never overwritten", name);
@@ -127,13 +106,13 @@ static void add_scaled(float *acc, const sss_image *light_a,
 {
 	if (!colour->data || (!light_a->data && !light_b->data))
 		return;
-	const float *c = pixel(colour, x, y);
+	const float *c = sss__at(colour, x, y);
 	for (int k = 0; k < 3; k++) {
 		float l = 0.0f;
 		if (light_a->data)
-			l += pixel(light_a, x, y)[k];
+			l += sss__at(light_a, x, y)[k];
 		if (light_b->data)
-			l += pixel(light_b, x, y)[k];
+			l += sss__at(light_b, x, y)[k];
 		acc[k] += l * c[k];
 	}
 }
@@ -142,7 +121,7 @@ static void add_plain(float *acc, const sss_image *im, int32_t x, int32_t y)
 {
 	if (!im->data)
 		return;
-	const float *v = pixel(im, x, y);
+	const float *v = sss__at(im, x, y);
 	for (int k = 0; k < 3; k++)
 		acc[k] += v[k];
 }
@@ -179,27 +158,27 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 		for (int32_t x = 0; x < w; x++) {
 			size_t i = (size_t)y * w + x;
 			float *s = signal + 3 * i;
-			const float *dd = pixel(&p->diff_dir, x, y);
-			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
+			const float *dd = sss__at(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? sss__at(&p->diff_ind, x, y)
 			                                   : NULL;
 			for (int c = 0; c < 3; c++)
 				s[c] = di ? dd[c] + di[c] : dd[c];
 
-			float index = pixel(&p->index_ma, x, y)[0];
-			float z = pixel(&p->depth, x, y)[0];
+			float index = sss__at(&p->index_ma, x, y)[0];
+			float z = sss__at(&p->depth, x, y)[0];
 			int16_t k = -1;
 			if (index >= 0.5f && index < 65535.5f)
 				k = by_index[(int32_t)(index + 0.5f)];
 			if (!(z > 0.0f && z < ctx->background_depth))
 				k = -1;
 			if (k >= 0 && p->position.data &&
-			    !sss__isfinite3(pixel(&p->position, x, y)))
+			    !sss__isfinite3(sss__at(&p->position, x, y)))
 				k = -1;
 			if (k >= 0 && transmission) /* back-lit light, before the blur */
 				sss__transmission_add(transmission, k, x, y, s);
 			if (k >= 0 && kernels[k].texturing ==
 			              SSS_TEXTURING_PRE_AND_POST) {
-				const float *col = pixel(&p->diff_col, x, y);
+				const float *col = sss__at(&p->diff_col, x, y);
 				for (int c = 0; c < 3; c++)
 					s[c] *= sqrtf(fmaxf(col[c], 0.0f));
 			}
@@ -225,10 +204,10 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 	for (int32_t y = y0; y < y1; y++) {
 		for (int32_t x = 0; x < w; x++) {
 			size_t i = (size_t)y * w + x;
-			const float *dd = pixel(&p->diff_dir, x, y);
-			const float *di = p->diff_ind.data ? pixel(&p->diff_ind, x, y)
+			const float *dd = sss__at(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? sss__at(&p->diff_ind, x, y)
 			                                   : NULL;
-			const float *col = pixel(&p->diff_col, x, y);
+			const float *col = sss__at(&p->diff_col, x, y);
 			float light[3];
 			for (int c = 0; c < 3; c++) {
 				float l = di ? dd[c] + di[c] : dd[c];
@@ -248,7 +227,7 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				sss__calibration_apply(&materials[slot[i]], col, light);
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
-				           y * stride_of(out_diffuse_light) +
+				           y * sss__stride(out_diffuse_light) +
 				           (int64_t)x * out_diffuse_light->channels;
 				memcpy(o, light, sizeof light);
 			}
@@ -262,11 +241,11 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				           x, y);
 				add_plain(acc, &p->emit, x, y);
 				add_plain(acc, &p->env, x, y);
-				float *o = out_combined->data + y * stride_of(out_combined) +
+				float *o = out_combined->data + y * sss__stride(out_combined) +
 				           (int64_t)x * out_combined->channels;
 				memcpy(o, acc, sizeof acc);
 				if (out_combined->channels >= 4)
-					o[3] = p->combined.data ? pixel(&p->combined, x, y)[3]
+					o[3] = p->combined.data ? sss__at(&p->combined, x, y)[3]
 					                        : 1.0f;
 			}
 		}
@@ -300,7 +279,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	if ((r = check_options(&opt, errbuf, errbuf_len)))
 		return r;
 
-	if ((r = check_image("DiffDir", &p->diff_dir, 3, 1, p->diff_dir.width,
+	if ((r = sss__check_image("DiffDir", &p->diff_dir, 3, 1, p->diff_dir.width,
 	                     p->diff_dir.height, errbuf, errbuf_len)))
 		return r;
 	int32_t w = p->diff_dir.width, h = p->diff_dir.height;
@@ -322,7 +301,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		{"IndexMA", &p->index_ma, 1, 1}, {"Position", &p->position, 3, 0},
 	};
 	for (size_t i = 0; i < sizeof passes / sizeof *passes; i++)
-		if ((r = check_image(passes[i].name, passes[i].im,
+		if ((r = sss__check_image(passes[i].name, passes[i].im,
 		                     passes[i].channels, passes[i].required, w, h,
 		                     errbuf, errbuf_len)))
 			return r;
@@ -372,7 +351,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	uint8_t on_screen[65536 / 8] = {0};
 	for (int32_t y = 0; y < h; y++)
 		for (int32_t x = 0; x < w; x++) {
-			float index = pixel(&p->index_ma, x, y)[0];
+			float index = sss__at(&p->index_ma, x, y)[0];
 			if (index >= 0.5f && index < 65535.5f) {
 				int32_t i = (int32_t)(index + 0.5f);
 				on_screen[i / 8] |= (uint8_t)(1u << (i % 8));
@@ -391,10 +370,10 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 
 	sss__job job = {
 		.width = w, .height = h, .kernels = kernels, .slot = slot,
-		.depth = p->depth.data, .depth_stride = stride_of(&p->depth),
+		.depth = p->depth.data, .depth_stride = sss__stride(&p->depth),
 		.depth_channels = p->depth.channels,
 		.position = p->position.data,
-		.position_stride = p->position.data ? stride_of(&p->position) : 0,
+		.position_stride = p->position.data ? sss__stride(&p->position) : 0,
 		.position_channels = p->position.channels,
 		.max_support_px = opt.max_support_px,
 		.signal = signal, .scratch = scratch,

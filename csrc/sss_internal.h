@@ -138,6 +138,34 @@ typedef void (*sss__rows_fn)(void *ctx, int32_t y0, int32_t y1);
 void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
                         void *ctx);
 
+/* Image views (sss_image): floats per row, the pixel at (x, y), and the
+ * byte range a view touches (for the no-aliasing checks). */
+static inline int64_t sss__stride(const sss_image *im)
+{
+	return im->row_stride ? im->row_stride
+	                      : (int64_t)im->width * im->channels;
+}
+
+static inline const float *sss__at(const sss_image *im, int32_t x, int32_t y)
+{
+	return im->data + y * sss__stride(im) + (int64_t)x * im->channels;
+}
+
+static inline void sss__span(const sss_image *im, const char **lo,
+                             const char **hi)
+{
+	*lo = (const char *)im->data;
+	*hi = (const char *)(im->data + (im->height - 1) * sss__stride(im) +
+	                     (int64_t)im->width * im->channels);
+}
+
+/* Checks one pass view against the frame size w x h (sss_apply.c);
+ * absent passes (data == NULL) are fine unless required. Errors name the
+ * pass. */
+sss_result sss__check_image(const char *name, const sss_image *im,
+                            int32_t min_channels, int required, int32_t w,
+                            int32_t h, char *errbuf, size_t errbuf_len);
+
 static inline int sss__isfinite3(const float *v)
 {
 	return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);

@@ -382,48 +382,23 @@ sss_result sss_transmittance(const sss_material *mat, double thickness,
 
 /* ---------------------------------------------------------------- passes */
 
-static int64_t stride_of(const sss_image *im)
-{
-	return im->row_stride ? im->row_stride
-	                      : (int64_t)im->width * im->channels;
-}
-
-static const float *pixel(const sss_image *im, int32_t x, int32_t y)
-{
-	return im->data + y * stride_of(im) + (int64_t)x * im->channels;
-}
-
 static sss_result check_pass(const char *name, const sss_image *im,
                              int32_t channels, int32_t w, int32_t h,
                              const sss_image *outs[2], char *errbuf,
                              size_t errbuf_len)
 {
-	if (!im->data)
-		return SSS_OK;
-	if (im->width <= 0 || im->height <= 0)
-		return FAIL("pass %s: image size %dx%d must be at least 1x1", name,
-		            im->width, im->height);
-	if (im->channels < channels)
-		return FAIL("pass %s has %d channel(s), needs %d", name,
-		            im->channels, channels);
-	if (im->row_stride != 0 &&
-	    im->row_stride < (int64_t)im->width * im->channels)
-		return FAIL("pass %s: row_stride %lld is smaller than width x "
-		            "channels", name, (long long)im->row_stride);
-	if (im->width != w || im->height != h)
-		return sss__fail(errbuf, errbuf_len, SSS_ERR_SIZE_MISMATCH,
-		                 "pass %s is %dx%d but DiffDir is %dx%d", name,
-		                 im->width, im->height, w, h);
-	const char *lo = (const char *)im->data;
-	const char *hi = (const char *)(im->data + (im->height - 1) *
-	                 stride_of(im) + (int64_t)im->width * im->channels);
+	sss_result r = sss__check_image(name, im, channels, 0, w, h, errbuf,
+	                                errbuf_len);
+	if (r || !im->data)
+		return r;
+	const char *lo, *hi;
+	sss__span(im, &lo, &hi);
 	for (int i = 0; i < 2; i++) {
 		const sss_image *o = outs[i];
 		if (!o || !o->data || o->width <= 0 || o->height <= 0)
 			continue;
-		const char *olo = (const char *)o->data;
-		const char *ohi = (const char *)(o->data + (o->height - 1) *
-		                  stride_of(o) + (int64_t)o->width * o->channels);
+		const char *olo, *ohi;
+		sss__span(o, &olo, &ohi);
 		if (olo < hi && lo < ohi)
 			return FAIL("an output overlaps pass %s; inputs are never "
 			            "overwritten", name);
@@ -499,11 +474,11 @@ void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
 	const tmat *mt = &t->mats[m];
 	if (mt->model == SSS_TRANSMISSION_OFF)
 		return;
-	double thick = pixel(&t->thickness, x, y)[0];
+	double thick = sss__at(&t->thickness, x, y)[0];
 	if (!(thick >= 0.0))
 		return; /* NaN or negative: no measurement here */
-	const float *bd = pixel(&t->back_dir, x, y);
-	const float *bi = t->back_ind.data ? pixel(&t->back_ind, x, y) : NULL;
+	const float *bd = sss__at(&t->back_dir, x, y);
+	const float *bi = t->back_ind.data ? sss__at(&t->back_ind, x, y) : NULL;
 	double b[3];
 	for (int c = 0; c < 3; c++) {
 		b[c] = (double)bd[c] + (bi ? (double)bi[c] : 0.0);
@@ -512,7 +487,7 @@ void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
 		if (b[c] < 0.0)
 			b[c] = 0.0; /* no negative light crosses */
 	}
-	double facing = t->facing.data ? pixel(&t->facing, x, y)[0] : 1.0;
+	double facing = t->facing.data ? sss__at(&t->facing, x, y)[0] : 1.0;
 	double tt = mt->thickness_scale == 0.0 ? 0.0
 	            : thick * mt->thickness_scale;
 	double T[3];
