@@ -207,17 +207,3 @@ def remove_setup(scene):
         tree.links.new(render_layers.outputs["Image"],
                        composite.inputs["Image"])
     return len(ours)
-
-
-# No classes: the module only builds node trees.
-classes = ()
-
-
-def register():
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)

@@ -318,12 +318,4 @@ class SSS_OT_assign_pass_indices(bpy.types.Operator):
 classes = (SSS_OT_render, SSS_OT_apply, SSS_OT_remove_setup,
            SSS_OT_assign_pass_indices)
 
-
-def register():
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)

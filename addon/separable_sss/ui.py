@@ -284,12 +284,4 @@ class SSS_PT_material(bpy.types.Panel):
 classes = (SSS_PT_node_main, SSS_PT_node_found, SSS_PT_node_material,
            SSS_PT_material)
 
-
-def register():
-    for cls in classes:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(classes)
