@@ -10,6 +10,16 @@ BUILD = os.environ.get("SSS_BUILD", os.path.join(ROOT, "build"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))  # exr helpers
 
 
+def load_addon():
+    """The add-on from the source tree, on the library just built (not an
+    installed copy: test_install.py covers that)."""
+    os.environ.setdefault("SSS_LIB", os.path.join(BUILD, "libsss.so"))
+    if os.path.join(ROOT, "addon") not in sys.path:
+        sys.path.insert(0, os.path.join(ROOT, "addon"))
+    import separable_sss
+    return separable_sss
+
+
 def build_blend(kind, path, size=96, samples=8):
     """A scene from blender_scripts/build_scene.py, in its own process so
     this one's data is untouched."""

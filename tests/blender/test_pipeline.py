@@ -6,12 +6,9 @@ import bpy
 import numpy as np
 import pytest
 
-from helpers import BUILD, ROOT, build_blend, diff, snapshot
+from helpers import BUILD, ROOT, build_blend, diff, load_addon, snapshot
 
-os.environ.setdefault("SSS_LIB", os.path.join(BUILD, "libsss.so"))
-import sys  # noqa: E402
-sys.path.insert(0, os.path.join(ROOT, "addon"))
-import separable_sss  # noqa: E402
+separable_sss = load_addon()
 from separable_sss import pipeline  # noqa: E402
 
 from exr import pass_rgb, read_channels  # noqa: E402

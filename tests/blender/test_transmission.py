@@ -1,17 +1,12 @@
 """Back-lit transmission through the add-on, on a real Cycles render of a
 thin slab lit only from behind (build_scene.py --kind slab), headless."""
-import os
-
 import bpy
 import numpy as np
 import pytest
 
-from helpers import BUILD, ROOT, build_blend, diff, snapshot
+from helpers import build_blend, diff, load_addon, snapshot
 
-os.environ.setdefault("SSS_LIB", os.path.join(BUILD, "libsss.so"))
-import sys  # noqa: E402
-sys.path.insert(0, os.path.join(ROOT, "addon"))
-import separable_sss  # noqa: E402
+separable_sss = load_addon()
 from separable_sss import pipeline, transmission  # noqa: E402
 
 from exr import read_channels  # noqa: E402
