@@ -262,25 +262,9 @@ def timings_text(job):
 
 def cycles_rw_d_over_radius(a):
     """Mirror of csrc/sss_calibration.c: Burley d over the radius for
-    Cycles' random walk at albedo a."""
-    eta = 1.4
-    f_dr = -1.440 / eta ** 2 + 0.710 / eta + 0.668 + 0.0636 * eta
-    k = 4.0 / 3.0 * (1.0 + f_dr) / (1.0 - f_dr)
-    if not a >= 1e-4:
-        alpha = 0.0
-    elif a >= 0.995:
-        alpha = 0.999999
-    else:
-        lo, hi = 0.0, 1.0
-        for _ in range(48):
-            mid = 0.5 * (lo + hi)
-            t = math.sqrt(3.0 * (1.0 - mid))
-            if 0.5 * mid * (1.0 + math.exp(-k * t)) * math.exp(-t) < a:
-                lo = mid
-            else:
-                hi = mid
-        alpha = 0.5 * (lo + hi)
-    d = math.sqrt(3.0 * (1.0 - alpha)) / (1.9 - a + 3.5 * (a - 0.8) ** 2)
+    Cycles' random walk at albedo a: its mean free path over Burley's
+    searchlight fit, at least 0.032 below albedo 0.995."""
+    d = transmission.rw_mfp_over_radius(a) / (1.9 - a + 3.5 * (a - 0.8) ** 2)
     return max(d, 0.032) if a < 0.995 else d
 
 

@@ -207,7 +207,7 @@ def slab_reach(mfp, albedo, level=0.01):
     return hi
 
 
-def _rw_mfp_over_radius(a):
+def rw_mfp_over_radius(a):
     """Cycles' mean free path over the radius, sqrt(3 (1 - a')) with a'
     inverting Jensen's dipole at IOR 1.4 (bssrdf_setup_radius); mirror of
     csrc/sss_transmission.c rw_mfp_over_radius."""
@@ -234,7 +234,7 @@ def _mfp(mapping, r, a):
     the library derives it: Cycles' own for cycles-random-walk, l = d s(A)
     for the other mappings."""
     if mapping == "cycles-random-walk":
-        return r * _rw_mfp_over_radius(a)
+        return r * rw_mfp_over_radius(a)
     d = {"cycles": r / (4 * math.pi), "eevee": r * 0.0459101,
          "random-walk": r / (3.5 + 100 * (a - 0.33) ** 4)}[mapping]
     return d * (1.9 - a + 3.5 * (a - 0.8) ** 2)
