@@ -46,8 +46,10 @@ from mathutils import Vector
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
+from exr_io import read_exr  # noqa: E402
 
 ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
                (0.85, 0.9, 0.95), (0.98, 0.99, 1.0))
@@ -203,18 +205,6 @@ def render_to(scene, path, seed):
     s.exr_codec = "ZIP"
     bpy.data.images["Render Result"].save_render(path, scene=scene)
     return read_exr(path), seconds
-
-
-def read_exr(path):
-    import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(path)
-    if not inp:
-        raise RuntimeError(f"cannot read {path}: {oiio.geterror()}")
-    spec = inp.spec()
-    px = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return {n: np.array(px[:, :, i]) for i, n in
-            enumerate(spec.channelnames)}
 
 
 def rgb(ch, name):

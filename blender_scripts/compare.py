@@ -60,6 +60,7 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 
 import compare_metrics as cm  # noqa: E402
+from exr_io import read_exr, write_exr  # noqa: E402
 
 BACKGROUND = 1e10
 REF_SEED_OFFSET = 7919  # reference noise independent of the others'
@@ -124,34 +125,7 @@ def maybe_reexec_with_display(args):
     sys.exit(subprocess.call(cmd, env=env))
 
 
-# --------------------------------------------------------------- EXR I/O
-
-def read_exr(path):
-    import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(path)
-    if not inp:
-        raise RuntimeError(f"cannot read {path}: {oiio.geterror()}")
-    spec = inp.spec()
-    px = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return {n: np.array(px[:, :, i]) for i, n in
-            enumerate(spec.channelnames)}
-
-
-def write_exr(path, channels):
-    import OpenImageIO as oiio
-    names = list(channels)
-    h, w = channels[names[0]].shape
-    spec = oiio.ImageSpec(w, h, len(names), oiio.FLOAT)
-    spec.channelnames = names
-    spec.attribute("compression", "zip")
-    out = oiio.ImageOutput.create(path)
-    if not out or not out.open(path, spec):
-        raise RuntimeError(f"cannot write {path}: {oiio.geterror()}")
-    out.write_image(np.stack([channels[n] for n in names], axis=-1)
-                    .astype(np.float32))
-    out.close()
-
+# ------------------------------------------- passes (EXR I/O: exr_io.py)
 
 def rgb(ch, name):
     """(h, w, 3) of the first channel set ending in name.R/G/B."""

@@ -37,6 +37,7 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 
 import compare_metrics as cm  # noqa: E402
+from exr_io import read_exr  # noqa: E402
 
 REF_SEED_OFFSET = 7919
 
@@ -63,16 +64,6 @@ def parse_args():
     a = p.parse_args(argv)
     a.resolution = tuple(int(v) for v in a.resolution.lower().split("x"))
     return a
-
-
-def read_exr(path):
-    import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(path)
-    spec = inp.spec()
-    px = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return {n: np.array(px[:, :, i]) for i, n in
-            enumerate(spec.channelnames)}
 
 
 def rgb(ch, prefix):
