@@ -38,7 +38,6 @@ import math
 import os
 import sys
 import time
-import traceback
 
 import bpy
 from mathutils import Vector
@@ -50,6 +49,7 @@ sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
 from exr_io import read_exr  # noqa: E402
+from script_cli import run_main, script_argv  # noqa: E402
 
 ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
                (0.85, 0.9, 0.95), (0.98, 0.99, 1.0))
@@ -61,7 +61,7 @@ def log(*a):
 
 
 def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = script_argv()
     p = argparse.ArgumentParser(prog="calibrate.py")
     p.add_argument("--out", required=True)
     p.add_argument("--part", default="energy,edge,texture")
@@ -481,10 +481,4 @@ def main():
     log(f"done in {time.perf_counter() - t0:.0f} s")
 
 
-try:
-    main()
-except SystemExit:
-    raise
-except Exception:
-    traceback.print_exc()
-    sys.exit(1)
+run_main(main)

@@ -17,16 +17,18 @@ import os
 import shutil
 import sys
 import time
-import traceback
 
 import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "addon"))
+sys.path.insert(0, HERE)
+
+from script_cli import run_main, script_argv  # noqa: E402
 
 
 def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = script_argv()
     p = argparse.ArgumentParser(prog="render_sss.py")
     p.add_argument("--output", required=True)
     p.add_argument("--frames", help="A-B or A (default: the current frame)")
@@ -102,10 +104,4 @@ def main():
         sys.exit(1)
 
 
-try:
-    main()
-except SystemExit:
-    raise
-except Exception:
-    traceback.print_exc()
-    sys.exit(1)
+run_main(main)
