@@ -9,7 +9,9 @@ SSS and EEVEE's own SSS, on one .blend, headless.
 Renders, all in this one run (so every time is measured on the same
 machine under the same load):
 - Cycles with the materials' random-walk SSS at each --rw-samples count;
-  the highest count, rendered with another seed, is the reference;
+  the highest count is the reference: two renders of half as many samples
+  with two other seeds, averaged, so that its own noise is measured and
+  taken out of every error (rmse_c, compare_metrics.py);
 - Cycles with material SSS switched off (the add-on's switched_off) at each
   --samples count, then each method the library accepts (enumerated at run
   time: a method the library answers SSS_ERR_UNSUPPORTED is skipped with a
@@ -61,6 +63,7 @@ import numpy as np  # noqa: E402
 
 import compare_metrics as cm  # noqa: E402
 from exr_io import read_exr, write_exr  # noqa: E402
+from script_cli import run_main, script_argv  # noqa: E402
 
 BACKGROUND = 1e10
 REF_SEED_OFFSET = 7919  # reference noise independent of the others'
@@ -71,7 +74,7 @@ def log(*a):
 
 
 def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = script_argv()
     p = argparse.ArgumentParser(prog="compare.py")
     p.add_argument("--scene", required=True, help=".blend to compare on")
     p.add_argument("--out", required=True, help="output folder")
@@ -218,6 +221,7 @@ class Bench:
         self.rows = []     # dicts: renderer, method, samples, times, image
         self.mask = None
         self.skipped = []
+        self.ref_halves = None
 
     def add(self, renderer, method, samples, render_s, post_s, image,
             io_s=0.0):
@@ -231,16 +235,29 @@ class Bench:
 
 
 def run_rw(bench, args):
+    """The random walk at each count; the highest is the reference, the
+    mean of two renders of half its samples with two other seeds, so that
+    its own noise can be measured (compare_metrics: rmse_c)."""
     scene = open_scene(args, "CYCLES")
     seed = scene.cycles.seed
-    for i, n in enumerate(args.rw_samples):
-        ref = i == len(args.rw_samples) - 1
+    for n in args.rw_samples[:-1]:
         scene.cycles.samples = n
-        scene.cycles.seed = seed + REF_SEED_OFFSET if ref else seed
+        scene.cycles.seed = seed
         seconds = render(scene)
         ch = save_result(scene, os.path.join(bench.work, f"rw_{n}.exr"))
-        bench.add("cycles", "random-walk" + (" (ref)" if ref else ""), n,
-                  seconds, 0.0, rgb(ch, "Combined"))
+        bench.add("cycles", "random-walk", n, seconds, 0.0,
+                  rgb(ch, "Combined"))
+    n = args.rw_samples[-1]
+    halves, seconds = [], 0.0
+    for k in (1, 2):
+        scene.cycles.samples = n // 2
+        scene.cycles.seed = seed + k * REF_SEED_OFFSET
+        seconds += render(scene)
+        ch = save_result(scene, os.path.join(bench.work, f"rw_{n}_{k}.exr"))
+        halves.append(rgb(ch, "Combined").astype(np.float32))
+    bench.ref_halves = tuple(halves)
+    bench.add("cycles", "random-walk (ref)", n, seconds, 0.0,
+              (halves[0] + halves[1]) / 2)
 
 
 def apply_methods(bench, renderer, samples, render_s, inp, desc, base_rgb):
@@ -369,7 +386,19 @@ def run_eevee(bench, args):
 
 COLUMNS = ("scene", "renderer", "method", "samples", "render_s", "post_s",
            "io_s", "total_s", "rmse", "rel_mae", "rmse_q", "rel_mae_q",
-           "ssim", "max_err")
+           "rmse_c", "rmse_q_c", "ssim", "max_err")
+
+
+def cut(after, before):
+    """% less error after than before."""
+    return 100 * (1 - after / before) if before > 0 else float("nan")
+
+
+def err(r, key):
+    """r's error `key` ("rmse" or "rmse_q") against the noise-free image
+    the reference estimates where measured, else against the reference."""
+    c = r.get(key + "_c", float("nan"))
+    return c if math.isfinite(c) else r[key]
 
 
 def score(bench, args):
@@ -378,7 +407,7 @@ def score(bench, args):
     bench.exposure = cm.exposure_for(ref["image"], mask)
     for r in bench.rows:
         r.update(cm.all_metrics(r["image"], ref["image"], mask,
-                                bench.exposure))
+                                bench.exposure, bench.ref_halves))
         r["scene"] = args.name
     return ref
 
@@ -400,9 +429,13 @@ def write_tables(bench, args, summary):
     lines = [f"# SSS comparison: {args.name}", "",
              f"Scene `{args.scene}`, {args.resolution[0]}x"
              f"{args.resolution[1]}, reference: Cycles random walk at "
-             f"{max(args.rw_samples)} samples (another seed). Errors over "
+             f"{max(args.rw_samples)} samples (two renders of half as "
+             "many with two other seeds, averaged). Errors over "
              f"the {int(bench.mask.sum())} scattering pixels, linear "
-             "light; `_q`: at quarter resolution (4x4 boxes). Times in "
+             "light; `_q`: at quarter resolution (4x4 boxes); `_c`: against "
+             "the noise-free image the reference estimates (its own noise, "
+             "measured from the difference of its halves, removed; the "
+             "summary uses these). Times in "
              "seconds, measured in this run; post = the library's scatter "
              "time (io = its EXR read + write, not counted in total).", "",
              "| " + " | ".join(COLUMNS) + " |",
@@ -431,8 +464,9 @@ def summarise(bench, args):
     ours = [m for m, _ in bench.methods]
     default = bench.default_method
     out = [f"scene {args.name}: error = RMSE over scattering pixels vs "
-           f"random walk {max(args.rw_samples)} spp; default method "
-           f"{default}"]
+           f"random walk {max(args.rw_samples)} spp"
+           + (" with its own noise removed (rmse_c)" if bench.ref_halves
+              else "") + f"; default method {default}"]
     for renderer, counts in (("cycles", args.samples),
                              ("eevee", [args.eevee_samples])):
         for n in counts:
@@ -445,41 +479,71 @@ def summarise(bench, args):
                      r["samples"] == n and r["method"] in ours]
             if not cands:
                 continue
-            best = min(cands, key=lambda r: r["rmse"])
+            best = min(cands, key=lambda r: err(r, "rmse"))
             dflt = next((r for r in cands if r["method"] == default), best)
             out.append(f"  {renderer} {n} spp: no-sss RMSE "
-                       f"{base['rmse']:.4g} ({base['total_s']:.2f} s)")
+                       f"{err(base, 'rmse'):.4g} ({base['total_s']:.2f} s)")
             for label, r in (("default", dflt), ("best", best)):
-                red = 100 * (1 - r["rmse"] / base["rmse"]) \
-                    if base["rmse"] > 0 else float("nan")
+                red = cut(err(r, "rmse"), err(base, "rmse"))
                 s, how = cm.interp_samples([x["samples"] for x in rw],
-                                           [x["rmse"] for x in rw],
-                                           r["rmse"])
+                                           [err(x, "rmse") for x in rw],
+                                           err(r, "rmse"))
                 t_rw = cm.time_at([x["samples"] for x in rw_all],
                                   [x["render_s"] for x in rw_all], s) \
                     if math.isfinite(s) else float("nan")
                 out.append(
                     f"    {label:<7} {r['method']:<16} RMSE "
-                    f"{r['rmse']:.4g}: {red:.1f} % less error than no-sss; "
+                    f"{err(r, 'rmse'):.4g}: {red:.1f} % less error than no-sss; "
                     f"random walk reaches it at ~{s:.0f} spp ({how}) "
                     f"in ~{t_rw:.2f} s; ours {r['total_s']:.2f} s "
                     f"(render {r['render_s']:.2f} + post "
                     f"{r['post_s']:.3f})")
                 # At quarter resolution noise averages away, bias stays.
                 sq, howq = cm.interp_samples([x["samples"] for x in rw],
-                                             [x["rmse_q"] for x in rw],
-                                             r["rmse_q"])
-                redq = 100 * (1 - r["rmse_q"] / base["rmse_q"]) \
-                    if base["rmse_q"] > 0 else float("nan")
+                                             [err(x, "rmse_q") for x in rw],
+                                             err(r, "rmse_q"))
+                redq = cut(err(r, "rmse_q"), err(base, "rmse_q"))
                 out.append(
-                    f"      quarter res: RMSE {r['rmse_q']:.4g} vs no-sss "
-                    f"{base['rmse_q']:.4g} ({redq:.1f} % less); random walk "
+                    f"      quarter res: RMSE {err(r, 'rmse_q'):.4g} vs no-sss "
+                    f"{err(base, 'rmse_q'):.4g} ({redq:.1f} % less); random walk "
                     f"reaches it at ~{sq:.0f} spp ({howq})")
+    out += goal_lines(rows, default)
     for r in rows:
         if r["method"] == "eevee-sss":
             out.append(f"  eevee own SSS {r['samples']} spp: RMSE "
-                       f"{r['rmse']:.4g} in {r['total_s']:.2f} s")
+                       f"{err(r, 'rmse'):.4g} in {r['total_s']:.2f} s")
     return out
+
+
+GOAL_CUT = 30.0        # % less error than the render without SSS ...
+GOAL_TIME_SHARE = 0.05  # ... in at most this share of the reference's time
+
+
+def goal_lines(rows, default):
+    """The product's accuracy goal, judged on the most samples whose render
+    plus post-process stays within GOAL_TIME_SHARE of the reference's
+    render time (Cycles rows)."""
+    ref = next(r for r in rows if r["method"].endswith("(ref)"))
+    budget = GOAL_TIME_SHARE * ref["render_s"]
+    ours = [r for r in rows if r["renderer"] == "cycles" and
+            r["method"] == default and r["total_s"] <= budget]
+    head = (f"  goal: {GOAL_CUT:.0f} % less error than no-sss within "
+            f"{100 * GOAL_TIME_SHARE:.0f} % of the reference's "
+            f"{ref['render_s']:.1f} s")
+    if not ours:
+        return [f"{head}: no render with material SSS off fits in "
+                f"{budget:.2f} s; measure with more reference samples"]
+    r = max(ours, key=lambda r: r["samples"])
+    base = next(x for x in rows if x["renderer"] == "cycles" and
+                x["method"] == "no-sss" and x["samples"] == r["samples"])
+    full, full_q = cut(err(r, "rmse"), err(base, "rmse")), \
+        cut(err(r, "rmse_q"), err(base, "rmse_q"))
+    raw, raw_q = cut(r["rmse"], base["rmse"]), cut(r["rmse_q"], base["rmse_q"])
+    return [f"{head}: {'met' if full >= GOAL_CUT else 'missed'} at "
+            f"{r['samples']} spp ({100 * r['total_s'] / ref['render_s']:.1f}"
+            f" % of it): {full:.1f} % less at full resolution, {full_q:.1f} "
+            f"% at quarter resolution (against the reference itself, with "
+            f"its noise: {raw:.1f} % and {raw_q:.1f} %)"]
 
 
 def crop_box(mask, pad=0.12):
@@ -566,15 +630,16 @@ def plot(bench, args, path):
         series.setdefault((r["renderer"], r["method"]), []).append(r)
     for ax, key, title in ((axes[0], "rmse", "RMSE, full resolution"),
                            (axes[1], "rmse_q", "RMSE, quarter resolution")):
+        title += " (reference noise removed)" if bench.ref_halves else ""
         for (renderer, method), rs in series.items():
             rs = sorted(rs, key=lambda r: r["total_s"])
             t = [r["total_s"] for r in rs]
-            e = [max(r[key], 1e-6) for r in rs]
+            e = [max(err(r, key), 1e-6) for r in rs]
             style = "o-" if renderer == "cycles" else "s--"
             ax.plot(t, e, style, label=f"{renderer} {method}")
             for r in rs:
                 ax.annotate(str(r["samples"]), (r["total_s"],
-                                                max(r[key], 1e-6)),
+                                                max(err(r, key), 1e-6)),
                             fontsize=6, xytext=(3, 3),
                             textcoords="offset points")
         ax.set_xscale("log")
@@ -631,10 +696,5 @@ def main():
     separable_sss.unregister()
 
 
-try:
-    main()
-except SystemExit:
-    raise
-except Exception:
-    traceback.print_exc()
-    sys.exit(1)
+if __name__ == "__main__":
+    run_main(main)

@@ -14,6 +14,14 @@ background).
   as a display at that size would); a block counts when at least 75 % of
   its pixels are in the mask. This separates noise (which averages away)
   from bias (which does not).
+- rmse_c, rmse_q_c: the RMSE against the noise-free image the reference
+  estimates. The reference is the mean of two renders with independent
+  seeds, A and B; its own noise variance per pixel and channel is
+  E[(A - B)^2] / 4, and since the image's noise is independent of the
+  reference's, E[MSE(img, ref)] = MSE(img, truth) + that variance. So
+  rmse_c = sqrt(max(0, MSE(img, ref) - mean((A - B)^2) / 4)) (at quarter
+  resolution from the downsampled halves). Without it a noisy reference
+  adds the same floor to every error and shrinks every ratio of errors.
 - max_err: the largest per-pixel max-over-RGB |img - ref| over the mask.
 - ssim: Wang et al. 2004 structural similarity with an 11x11 Gaussian
   window (sigma 1.5, truncated at 5 pixels and renormalised at the image
@@ -126,10 +134,29 @@ def exposure_for(ref, mask):
     return 0.85 / p if p > 0 else 1.0
 
 
-def all_metrics(img, ref, mask, exposure):
+def noise_corrected_rmse(img, ref, mask, half_a, half_b):
+    """RMSE against the expectation of ref = (half_a + half_b) / 2, two
+    independent renders (see the module doc)."""
+    _check(img, ref, mask)
+    d = (img[mask] - ref[mask]).astype(np.float64)
+    h = (half_a[mask] - half_b[mask]).astype(np.float64)
+    return float(np.sqrt(max(0.0, np.mean(d * d) - np.mean(h * h) / 4)))
+
+
+def all_metrics(img, ref, mask, exposure, halves=None):
+    """halves: the reference's two independent halves, for rmse_c and
+    rmse_q_c (nan without them)."""
     qi, qr, qm = quarter(img, ref, mask)
     have_q = bool(qm.any())
-    return {
+    nan = float("nan")
+    corrected = {"rmse_c": nan, "rmse_q_c": nan}
+    if halves is not None:
+        a, b = halves
+        corrected["rmse_c"] = noise_corrected_rmse(img, ref, mask, a, b)
+        if have_q:
+            corrected["rmse_q_c"] = noise_corrected_rmse(
+                qi, qr, qm, downsample(a), downsample(b))
+    return {**corrected,
         "rmse": rmse(img, ref, mask),
         "rel_mae": rel_mae(img, ref, mask),
         "rmse_q": rmse(qi, qr, qm) if have_q else float("nan"),

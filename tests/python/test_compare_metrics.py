@@ -54,6 +54,32 @@ def test_quarter_resolution_averages_noise_away_but_not_bias():
     assert cm.rmse(qi, qr, qm) == pytest.approx(0.1, rel=1e-4)
 
 
+def test_noise_corrected_rmse_removes_the_reference_noise():
+    """A noisy reference inflates every error by its own variance; the
+    corrected RMSE recovers the error against the noise-free truth."""
+    truth, mask = images(h=256, w=320)
+    mask[:] = True
+    rng = np.random.default_rng(2)
+    half_a = truth + rng.normal(0, 0.1, truth.shape)
+    half_b = truth + rng.normal(0, 0.1, truth.shape)
+    ref = (half_a + half_b) / 2
+    biased = truth + 0.05
+    raw = cm.rmse(biased, ref, mask)
+    assert raw == pytest.approx(np.hypot(0.05, 0.1 / np.sqrt(2)), rel=0.02)
+    fixed = cm.noise_corrected_rmse(biased, ref, mask, half_a, half_b)
+    assert fixed == pytest.approx(0.05, rel=0.05)
+    # The image's own noise stays an error; only the reference's goes.
+    noisy = truth + rng.normal(0, 0.08, truth.shape)
+    assert cm.noise_corrected_rmse(noisy, ref, mask, half_a, half_b) == \
+        pytest.approx(0.08, rel=0.05)
+    # Never negative: the truth itself measures (about) zero.
+    assert cm.noise_corrected_rmse(truth, ref, mask, half_a, half_b) < 0.01
+    m = cm.all_metrics(biased, ref, mask, 1.0, halves=(half_a, half_b))
+    assert m["rmse_c"] == pytest.approx(fixed)
+    assert m["rmse_q_c"] == pytest.approx(0.05, rel=0.05)
+    assert np.isnan(cm.all_metrics(biased, ref, mask, 1.0)["rmse_c"])
+
+
 def test_ssim_properties():
     ref, mask = images()
     x = cm.display_luma(ref, 1.0)
