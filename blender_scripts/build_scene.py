@@ -12,9 +12,10 @@ KIND:
   head   the demo's head with four times its Subsurface (8 cm red
          radius), so that scattering spans several pixels at 160x120
          (compare.py's first bundled scene)
-  marble five white-marble objects at depths from 2.5 to 9 m, key light from
-         the side and a back light (compare.py's second bundled scene)
-  mixed  a skin sphere and a jade monkey (two profiles) behind a grey,
+  marble five small marble pieces (measured marble's scattering lengths)
+         at depths from 10 to 36 cm, key light from the side and a back
+         light (compare.py's second bundled scene)
+  mixed  a skin sphere and a jade bangle (two profiles) behind a grey,
          non-scattering pillar, side and back light (the third)
   slab   a thin (1.5 cm) random-walk skin slab facing the camera, lit only
          from behind (back-lit transmission's test)
@@ -151,17 +152,39 @@ def smooth(obj, levels=0):
     return obj
 
 
+def scale_scene(scene, s):
+    """Scale every object, light and the camera about the origin by s.
+    Area lights keep their irradiance (power x s^2); suns need nothing."""
+    for obj in scene.objects:
+        obj.location = obj.location * s
+        if obj.type == "MESH":
+            obj.scale = obj.scale * s
+        elif obj.type == "LIGHT" and obj.data.type == "AREA":
+            obj.data.size *= s
+            obj.data.energy *= s * s
+        elif obj.type == "LIGHT" and obj.data.type in ("POINT", "SPOT"):
+            obj.data.energy *= s * s
+            obj.data.shadow_soft_size *= s
+    scene.camera.data.clip_start = min(scene.camera.data.clip_start,
+                                       0.1 * s)
+
+
 def build_marble(scene):
-    """Marble at several depths: the same world-space radius covers fewer
-    pixels the farther the object is, so every method's depth handling
-    shows. An 80 cm mean free path (soap-like) keeps the kernel several pixels
-    wide even on the far objects at 160x120."""
+    """Small pieces of marble (spheres of 1.4 cm radius, a 2.4 cm cube, a
+    cylinder: the size of beads and dice) at depths from 10 to 36 cm, under
+    a hard key light and a back light. The marble has measured marble's
+    diffusion lengths (1/sigma_tr = 8.5, 5.6, 4.0 mm for red, green, blue;
+    Jensen et al. 2001), so at this size light scatters over about half an
+    object's radius. The same world-space radius covers fewer pixels the
+    farther the object is, so every method's depth handling shows."""
     marble = random_walk(material("Marble", **{
-        "Base Color": (0.83, 0.79, 0.75, 1.0), "Subsurface": 0.8,
-        "Subsurface Radius": (1.0, 0.85, 0.7),
+        "Base Color": (0.83, 0.79, 0.75, 1.0), "Subsurface": 0.0085,
+        "Subsurface Radius": (1.0, 0.66, 0.47),
         "Subsurface Color": (0.9, 0.88, 0.84, 1.0), "Roughness": 0.25}))
     floor = material("Floor", **{"Base Color": (0.12, 0.12, 0.13, 1.0),
                                  "Roughness": 0.8})
+    # Laid out at 25 times the size, then scaled down with the lights and
+    # the camera (scale_scene): the layout reads in round numbers.
     shapes = (("sphere", (-1.3, -1.0, 0.35)), ("cube", (0.1, 0.2, 0.35)),
               ("sphere", (1.6, 1.8, 0.35)), ("cylinder", (-0.6, 3.2, 0.35)),
               ("sphere", (0.9, 5.0, 0.35)))
@@ -193,17 +216,23 @@ def build_marble(scene):
     cam.location = (0.0, -3.6, 1.2)
     aim(cam, (0.1, 1.5, 0.3))
     cam.data.lens = 40
+    scale_scene(scene, 0.04)
 
 
 def build_mixed(scene):
     """Two profiles (skin, jade) and a non-scattering pillar in front of
-    both: scattering must not bleed across the pillar's silhouette."""
+    both: scattering must not bleed across the pillar's silhouette. The
+    jade is a bangle (a torus): a closed mesh, as the random walk needs
+    (Suzanne's eyes are separate shells inside the head, which the walk
+    leaves through). Scattering lengths are about a quarter of each
+    object's thickness: the skin's red 11 cm on a 45 cm sphere, the jade's
+    green 5.5 cm across the bangle's 22 cm band."""
     skin = random_walk(material("Skin", **{
-        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.5,
+        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.11,
         "Subsurface Radius": (1.0, 0.35, 0.2),
         "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.45}))
     jade = random_walk(material("Jade", **{
-        "Base Color": (0.3, 0.7, 0.4, 1.0), "Subsurface": 0.3,
+        "Base Color": (0.3, 0.7, 0.4, 1.0), "Subsurface": 0.055,
         "Subsurface Radius": (0.3, 1.0, 0.5),
         "Subsurface Color": (0.35, 0.8, 0.5, 1.0), "Roughness": 0.2}))
     tree = skin.node_tree
@@ -223,9 +252,12 @@ def build_mixed(scene):
                                                                 0.45),
                                          segments=48, ring_count=24)
     assign(smooth(bpy.context.active_object), skin)
-    bpy.ops.mesh.primitive_monkey_add(size=0.8, location=(0.5, 0.4, 0.45),
-                                      rotation=(0, 0, 0.35))
-    assign(smooth(bpy.context.active_object, 2), jade)
+    # Standing on its rim, turned 35 degrees from the camera.
+    bpy.ops.mesh.primitive_torus_add(
+        major_radius=0.32, minor_radius=0.11, major_segments=64,
+        minor_segments=24, location=(0.5, 0.4, 0.43),
+        rotation=(math.pi / 2, 0, math.radians(35)))
+    assign(smooth(bpy.context.active_object), jade)
     bpy.ops.mesh.primitive_cylinder_add(radius=0.09, depth=1.6,
                                         location=(-0.12, -0.8, 0.8),
                                         vertices=32)
