@@ -8,6 +8,8 @@
 #   make demo     render a small synthetic scene with SSS and write a PNG
 #   make compare  libsss against Cycles random walk and EEVEE on the three
 #                 bundled scenes: out/compare/SCENE/{sheet,plot}.png, results.*
+#   make sweep    how the error reduction depends on the scattering radius
+#                 (marble, mixed): out/compare/sweep/SCENE/sweep.{png,md,csv}
 #   make clean
 #
 # Results must not depend on the compiler contracting a*b+c into an FMA:
@@ -32,7 +34,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps test check valgrind fuzz demo demo-c report bench addon blender-test compare clean
+.PHONY: all deps test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -193,6 +195,26 @@ compare: deps all
 	@cat $(patsubst %,out/compare/%/summary.txt,$(COMPARE_SCENES)) \
 		>out/compare/summary.txt
 	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,results.csv,results.md} and out/compare/summary.txt"
+
+# Where screen-space scattering stops matching the random walk: the bundled
+# marble and mixed scenes with every Subsurface scaled from 0.5x to 64x
+# (blender_scripts/sweep_radius.py): out/compare/sweep/SCENE/sweep.{png,md,csv}.
+SWEEP_SCENES ?= marble mixed
+SWEEP_ARGS ?= --scales 0.5,1,2,4,8,16,32,64
+sweep: deps all
+	@mkdir -p out/compare/sweep $(BUILD)/compare
+	@for kind in $(SWEEP_SCENES); do \
+		log=$(BUILD)/compare/sweep_$$kind.log; \
+		$(BLENDER) -b --factory-startup --python-exit-code 1 \
+			--python blender_scripts/build_scene.py -- --kind $$kind \
+			--out $(BUILD)/compare/$$kind.blend >$$log 2>&1 && \
+		SSS_LIB=$(abspath $(BUILD))/libsss.so $(BLENDER) -b --factory-startup \
+			--python-exit-code 1 --python blender_scripts/sweep_radius.py -- \
+			--scene $(BUILD)/compare/$$kind.blend \
+			--out out/compare/sweep/$$kind $(SWEEP_ARGS) >>$$log 2>&1 \
+			|| { tail -n 40 $$log; exit 1; }; \
+		grep -E '^sweep' $$log; \
+	done
 
 clean:
 	rm -rf $(BUILD)

@@ -5,6 +5,7 @@ import os
 import subprocess
 
 import bpy
+import pytest
 
 from helpers import BUILD, ROOT, build_blend
 
@@ -63,7 +64,52 @@ def test_compare_quick(tmp_path):
         assert float(ours["post_s"]) > 0
         assert 0 < float(ours["ssim"]) <= 1
 
+    # The reference's own noise is measured (two halves) and taken out:
+    # the corrected errors exist and never exceed the raw ones.
+    for r in rows:
+        c, raw = float(r["rmse_c"]), float(r["rmse"])
+        assert 0 <= c <= raw + 1e-9, r
+    assert any(float(r["rmse_c"]) < float(r["rmse"]) for r in rw)
+
     md = (out / "results.md").read_text()
     assert "## Summary" in md and "random walk reaches it" in md
+    assert "  goal: 30 % less error than no-sss" in md
     # EEVEE ran (under xvfb-run) or says why not.
     assert any(r["renderer"] == "eevee" for r in rows) or "EEVEE" in md
+
+
+
+def test_sweep_radius(tmp_path):
+    """blender_scripts/sweep_radius.py on two scales at a tiny size: one
+    row per scale and sample count, radii scaled, a plot."""
+    blend = build_blend(SCENE, str(tmp_path / f"{SCENE}.blend"))
+    out = tmp_path / "sweep"
+    env = dict(os.environ, SSS_LIB=os.path.join(BUILD, "libsss.so"))
+    proc = subprocess.run(
+        [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code",
+         "1", "--python", os.path.join(ROOT, "blender_scripts",
+                                       "sweep_radius.py"),
+         "--", "--scene", blend, "--out", str(out), "--scales", "0.5,4",
+         "--resolution", "64x48", "--ref-samples", "32", "--samples", "8"],
+        capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    rows = _rows(out / "sweep.csv")
+    assert [(float(r["scale"]), int(r["samples"])) for r in rows] == \
+        [(0.5, 8), (4.0, 8)]
+    small, large = rows
+    assert float(large["radius_m"]) == \
+        pytest.approx(8 * float(small["radius_m"]), rel=2e-3)
+    assert float(large["kernel_px"]) > float(small["kernel_px"]) > 0
+    for r in rows:
+        assert float(r["rmse_no_sss"]) > 0 and float(r["rmse_ours"]) > 0
+    assert (out / "sweep.png").stat().st_size > 1000
+    assert not (out / "work").exists()
+
+    # Bad input is refused with the option's name.
+    proc = subprocess.run(
+        [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code",
+         "1", "--python", os.path.join(ROOT, "blender_scripts",
+                                       "sweep_radius.py"),
+         "--", "--scene", blend, "--out", str(out), "--scales", "0,1"],
+        capture_output=True, text=True, timeout=120, env=env)
+    assert proc.returncode != 0 and "--scales" in proc.stderr

@@ -1,0 +1,254 @@
+"""Where screen-space scattering stops matching the random walk: one scene
+rendered with every scattering material's Subsurface (its radius) scaled
+by each of a range of factors, headless.
+
+    blender -b --python-exit-code 1 --python blender_scripts/sweep_radius.py \\
+        -- --scene SCENE.blend --out DIR [--scales 0.25,0.5,1,2,4,8]
+        [--resolution 160x120] [--ref-samples 256] [--samples 16,64]
+        [--name NAME]
+
+For each scale, in this one run: Cycles' random walk at --ref-samples
+(the reference, another seed), Cycles with material SSS off at each
+--samples count, and the scene's default method on those passes (the
+add-on's own pipeline, as compare.py). The error is compare.py's: RMSE
+over the scattering pixels, at full and at quarter resolution (where the
+renders' noise averages away and the bias stays).
+
+Writes into DIR: sweep.csv, sweep.md (one row per scale and sample
+count: the largest radius in metres, the kernel's half-width in pixels on
+the nearest scattering object, both errors without and with our method
+and how much less error ours has) and sweep.png (that error reduction
+against the kernel's width, full and quarter resolution).
+
+Screen space sees one side of each object: once light scatters about as
+far as the objects are thick, the random walk carries it through them and
+out of sides the camera does not see, which no screen-space method models.
+This sweep shows where, for the scene's geometry and lights. The .blend is
+opened, never saved.
+"""
+import argparse
+import csv
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import compare  # noqa: E402  (also puts the add-on on sys.path)
+import compare_metrics as cm  # noqa: E402
+from exr_io import read_exr  # noqa: E402
+from script_cli import run_main, script_argv  # noqa: E402
+
+COLUMNS = ("scene", "scale", "radius_m", "kernel_px", "samples",
+           "rmse_no_sss", "rmse_ours", "cut", "rmse_q_no_sss",
+           "rmse_q_ours", "cut_q", "render_s", "post_s")
+
+
+def log(*a):
+    print("sweep:", *a, flush=True)
+
+
+def parse_args():
+    argv = script_argv()
+    p = argparse.ArgumentParser(prog="sweep_radius.py")
+    p.add_argument("--scene", required=True)
+    p.add_argument("--out", required=True)
+    p.add_argument("--name")
+    p.add_argument("--scales", default="0.25,0.5,1,2,4,8")
+    p.add_argument("--resolution", default="160x120")
+    p.add_argument("--ref-samples", type=int, default=256)
+    p.add_argument("--samples", default="16,64")
+    args = p.parse_args(argv)
+    try:
+        args.scales = sorted({float(x) for x in args.scales.split(",")})
+        args.samples = sorted({int(x) for x in args.samples.split(",")})
+        w, _, h = args.resolution.partition("x")
+        args.resolution = (int(w), int(h))
+    except ValueError as e:
+        p.error(f"--scales, --samples or --resolution: {e}")
+    if not args.scales or min(args.scales) <= 0:
+        p.error("--scales must be positive numbers")
+    if min(args.samples) < 1 or args.ref_samples <= max(args.samples):
+        p.error("--ref-samples must exceed every --samples count")
+    args.scene = os.path.abspath(args.scene)
+    args.out = os.path.abspath(args.out)
+    args.name = args.name or os.path.splitext(os.path.basename(
+        args.scene))[0]
+    # compare.open_scene reads these.
+    args.eevee_samples = 1
+    return args
+
+
+def scale_subsurface(found, scale):
+    """Multiply the Subsurface input of every scattering material's
+    Principled BSDF by scale (the radius is Subsurface x Subsurface
+    Radius)."""
+    done = set()
+    for f in found.found:
+        if f.material.name in done:
+            continue
+        done.add(f.material.name)
+        for node in f.material.node_tree.nodes:
+            if node.type != "BSDF_PRINCIPLED":
+                continue
+            sock = node.inputs["Subsurface"]
+            if sock.is_linked:
+                raise RuntimeError(
+                    f"material {f.material.name!r}: Subsurface is driven "
+                    "by a link; the sweep scales only a value")
+            sock.default_value *= scale
+
+
+def one_scale(args, scale, default_code, work):
+    from separable_sss import native, pipeline
+    from separable_sss.switch_off import switched_off
+    scene = compare.open_scene(args, "CYCLES")
+    found = pipeline.analyse(scene)
+    if not found.found:
+        raise RuntimeError("nothing scatters in this scene")
+    scale_subsurface(found, scale)
+    found = pipeline.analyse(scene)
+    radius = max(max(f.radius) for f in found.found)
+    kernel = max(pipeline.kernel_pixels(scene, f) for f in found.found)
+
+    seed = scene.cycles.seed
+    scene.cycles.samples = args.ref_samples
+    scene.cycles.seed = seed + compare.REF_SEED_OFFSET
+    compare.render(scene)
+    ref = compare.rgb(read_exr(_save(scene, work, "ref")), "Combined")
+    scene.cycles.seed = seed
+
+    rows = []
+    for n in args.samples:
+        scene.cycles.samples = n
+        inp = os.path.join(work, f"off_{n}_passes.exr")
+        desc = os.path.join(work, f"off_{n}_scene.json")
+        out = os.path.join(work, f"off_{n}_sss.exr")
+        with switched_off(scene, found):
+            seconds = compare.render(scene)
+            pipeline.save_passes(scene, inp)
+            pipeline.write_description(scene, found, desc)
+        ch = read_exr(inp)
+        idx = compare.np.rint(compare.single(ch, "IndexMA"))
+        mask = compare.np.isin(idx, [f.pass_index for f in found.found]) & \
+            (compare.single(ch, "Depth") < 1e9)
+        base = compare.rgb(ch, "Combined")
+        with native.Scene(desc) as sc:
+            t = sc.process(inp, out, method=default_code)
+        res = read_exr(out)
+        ours = compare.rgb(res, "SSS.Combined") if "SSS.Combined.R" in res \
+            else compare.rgb(res, "Combined")
+        e0, e1 = cm.rmse(base, ref, mask), cm.rmse(ours, ref, mask)
+        q0, q1 = (cm.rmse(*cm.quarter(img, ref, mask)) for img in
+                  (base, ours))
+        rows.append(dict(scene=args.name, scale=scale, radius_m=radius,
+                         kernel_px=kernel, samples=n, rmse_no_sss=e0,
+                         rmse_ours=e1, cut=_cut(e0, e1), rmse_q_no_sss=q0,
+                         rmse_q_ours=q1, cut_q=_cut(q0, q1),
+                         render_s=seconds, post_s=t["scatter"]))
+        log(f"scale {scale:g} ({radius:.4g} m, {kernel:.1f} px) {n} spp: "
+            f"RMSE {e0:.4g} -> {e1:.4g} ({rows[-1]['cut']:.1f} % less), "
+            f"quarter {q0:.4g} -> {q1:.4g} ({rows[-1]['cut_q']:.1f} % less)")
+    return rows
+
+
+def _save(scene, work, name):
+    from separable_sss import pipeline
+    path = os.path.join(work, f"{name}.exr")
+    pipeline.save_passes(scene, path)
+    return path
+
+
+def _cut(before, after):
+    return 100.0 * (1.0 - after / before) if before > 0 else float("nan")
+
+
+def write(args, rows):
+    def fmt(v):
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+    with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(COLUMNS)
+        for r in rows:
+            w.writerow([fmt(r[c]) for c in COLUMNS])
+    lines = [f"# Radius sweep: {args.name}", "",
+             f"Scene `{args.scene}`, {args.resolution[0]}x"
+             f"{args.resolution[1]}; every scattering material's Subsurface "
+             f"times `scale` (1 = the scene as built). Reference: random walk "
+             f"{args.ref_samples} spp (another seed); RMSE over the "
+             "scattering pixels, `_q` at quarter resolution; `cut`: % less "
+             "error with our default method than without SSS. `radius_m`: "
+             "the largest Subsurface x Subsurface Radius; `kernel_px`: the "
+             "kernel's half-width on the nearest scattering object.", "",
+             "| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    lines += ["| " + " | ".join(fmt(r[c]) for c in COLUMNS) + " |"
+              for r in rows]
+    lines += ["", "![error reduction against kernel width](sweep.png)", ""]
+    with open(os.path.join(args.out, "sweep.md"), "w") as f:
+        f.write("\n".join(lines))
+
+
+def plot(args, rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    for ax, key, title in ((axes[0], "cut", "full resolution"),
+                           (axes[1], "cut_q", "quarter resolution (bias)")):
+        for n in args.samples:
+            rs = sorted((r for r in rows if r["samples"] == n),
+                        key=lambda r: r["scale"])
+            ax.plot([r["kernel_px"] for r in rs], [r[key] for r in rs], "o-",
+                    label=f"SSS off {n} spp + ours")
+            for r in rs:
+                ax.annotate(f"x{r['scale']:g}", (r["kernel_px"], r[key]),
+                            fontsize=6, xytext=(3, 3),
+                            textcoords="offset points")
+        ax.axhline(0, color="k", lw=0.8)
+        ax.axhline(30, color="grey", ls=":", lw=0.8)
+        ax.set_xscale("log")
+        ax.set_xlabel("kernel half-width on the nearest object, px")
+        ax.set_title(f"{args.name}: {title}")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("% less error than without SSS\n(vs random walk "
+                       f"{args.ref_samples} spp)")
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main():
+    args = parse_args()
+    os.environ.setdefault("SSS_LIB", os.path.join(compare.ROOT, "build",
+                                                  "libsss.so"))
+    import separable_sss
+    separable_sss.register()
+    os.makedirs(args.out, exist_ok=True)
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    t0 = time.perf_counter()
+    scene = compare.open_scene(args, "CYCLES")
+    default = scene.sss.method.lower()
+    codes = dict(compare.library_methods())
+    if default not in codes:
+        raise RuntimeError(f"the scene's method {default!r} is not one of "
+                           f"the library's ({', '.join(codes)})")
+    log(f"{args.name}: scales {args.scales}, {args.resolution[0]}x"
+        f"{args.resolution[1]}, reference {args.ref_samples} spp, SSS off "
+        f"{args.samples}, method {default}")
+    rows = []
+    for scale in args.scales:
+        rows += one_scale(args, scale, codes[default], work)
+    write(args, rows)
+    plot(args, rows, os.path.join(args.out, "sweep.png"))
+    import shutil
+    shutil.rmtree(work, ignore_errors=True)
+    separable_sss.unregister()
+    log(f"wrote {args.out}/sweep.csv, sweep.md, sweep.png "
+        f"({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    run_main(main)
