@@ -8,11 +8,13 @@ by each of a range of factors, headless.
         [--name NAME]
 
 For each scale, in this one run: Cycles' random walk at --ref-samples
-(the reference, another seed), Cycles with material SSS off at each
---samples count, and the scene's default method on those passes (the
-add-on's own pipeline, as compare.py). The error is compare.py's: RMSE
-over the scattering pixels, at full and at quarter resolution (where the
-renders' noise averages away and the bias stays).
+(the reference: two renders of half as many samples with two other seeds,
+averaged), Cycles with material SSS off at each --samples count, and the
+scene's default method on those passes (the add-on's own pipeline, as
+compare.py). The error is compare.py's rmse_c: RMSE over the scattering
+pixels against the noise-free image the reference estimates (its own
+noise taken out), at full and at quarter resolution (where the renders'
+noise averages away and the bias stays).
 
 Writes into DIR: sweep.csv, sweep.md (one row per scale and sample
 count: the largest radius in metres, the kernel's half-width in pixels on
@@ -112,11 +114,17 @@ def one_scale(args, scale, default_code, work):
     radius = max(max(f.radius) for f in found.found)
     kernel = max(pipeline.kernel_pixels(scene, f) for f in found.found)
 
+    # The reference as in compare.py: two halves with two other seeds, so
+    # that its own noise comes out of the errors.
     seed = scene.cycles.seed
-    scene.cycles.samples = args.ref_samples
-    scene.cycles.seed = seed + compare.REF_SEED_OFFSET
-    compare.render(scene)
-    ref = compare.rgb(read_exr(_save(scene, work, "ref")), "Combined")
+    halves = []
+    for k in (1, 2):
+        scene.cycles.samples = args.ref_samples // 2
+        scene.cycles.seed = seed + k * compare.REF_SEED_OFFSET
+        compare.render(scene)
+        halves.append(compare.rgb(read_exr(_save(scene, work, f"ref_{k}")),
+                                  "Combined"))
+    ref = (halves[0] + halves[1]) / 2
     scene.cycles.seed = seed
 
     rows = []
@@ -139,9 +147,10 @@ def one_scale(args, scale, default_code, work):
         res = read_exr(out)
         ours = compare.rgb(res, "SSS.Combined") if "SSS.Combined.R" in res \
             else compare.rgb(res, "Combined")
-        e0, e1 = cm.rmse(base, ref, mask), cm.rmse(ours, ref, mask)
-        q0, q1 = (cm.rmse(*cm.quarter(img, ref, mask)) for img in
-                  (base, ours))
+        metrics = [cm.all_metrics(img, ref, mask, 1.0, halves)
+                   for img in (base, ours)]
+        e0, e1 = (m["rmse_c"] for m in metrics)
+        q0, q1 = (m["rmse_q_c"] for m in metrics)
         rows.append(dict(scene=args.name, scale=scale, radius_m=radius,
                          kernel_px=kernel, samples=n, rmse_no_sss=e0,
                          rmse_ours=e1, cut=_cut(e0, e1), rmse_q_no_sss=q0,
@@ -176,8 +185,9 @@ def write(args, rows):
              f"Scene `{args.scene}`, {args.resolution[0]}x"
              f"{args.resolution[1]}; every scattering material's Subsurface "
              f"times `scale` (1 = the scene as built). Reference: random walk "
-             f"{args.ref_samples} spp (another seed); RMSE over the "
-             "scattering pixels, `_q` at quarter resolution; `cut`: % less "
+             f"{args.ref_samples} spp (two halves, other seeds); RMSE over the "
+             "scattering pixels with the reference's own noise taken out "
+             "(compare.py's rmse_c), `_q` at quarter resolution; `cut`: % less "
              "error with our default method than without SSS. `radius_m`: "
              "the largest Subsurface x Subsurface Radius; `kernel_px`: the "
              "kernel's half-width on the nearest scattering object.", "",
@@ -212,7 +222,7 @@ def plot(args, rows, path):
         ax.set_title(f"{args.name}: {title}")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("% less error than without SSS\n(vs random walk "
-                       f"{args.ref_samples} spp)")
+                       f"{args.ref_samples} spp, its noise removed)")
     axes[1].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
