@@ -483,6 +483,9 @@ def summarise(bench, args):
             dflt = next((r for r in cands if r["method"] == default), best)
             out.append(f"  {renderer} {n} spp: no-sss RMSE "
                        f"{err(base, 'rmse'):.4g} ({base['total_s']:.2f} s)")
+            ceiling = noise_ceiling(rows, base)
+            if ceiling:
+                out.append(f"    {ceiling}")
             for label, r in (("default", dflt), ("best", best)):
                 red = cut(err(r, "rmse"), err(base, "rmse"))
                 s, how = cm.interp_samples([x["samples"] for x in rw],
@@ -515,6 +518,35 @@ def summarise(bench, args):
     return out
 
 
+def noise_ceiling(rows, base):
+    """What the render's own noise leaves to win at base's sample count:
+    its RMSE (compare_metrics.render_noise, from the no-sss errors at this
+    and the next count) and the error reduction of a post-process with no
+    bias at all that left that noise as it is. Scattering blurs only the
+    diffuse light, so the noise of every other pass stays in the result;
+    a blur also lowers the diffuse noise, which can take a method a little
+    past this."""
+    more = sorted((r for r in rows if r["renderer"] == base["renderer"] and
+                   r["method"] == "no-sss" and
+                   r["samples"] > base["samples"]),
+                  key=lambda r: r["samples"])
+    if not more:
+        return ""
+    noise = cm.render_noise(err(base, "rmse"), base["samples"],
+                            err(more[0], "rmse"), more[0]["samples"])
+    if not math.isfinite(noise):
+        return ""
+    head = (f"the render's own noise is {noise:.4g} RMSE here (from the "
+            f"no-sss errors at {base['samples']} and {more[0]['samples']} "
+            "spp)")
+    if noise >= 0.95 * err(base, "rmse"):
+        return (f"{head}: about all of its error; only blurring its diffuse "
+                "noise can lower it")
+    return (f"{head}: with no bias left and that noise as it is, a "
+            f"post-process would have {cut(noise, err(base, 'rmse')):.1f} % "
+            "less error (blurring the diffuse noise adds a little)")
+
+
 GOAL_CUT = 30.0        # % less error than the render without SSS ...
 GOAL_TIME_SHARE = 0.05  # ... in at most this share of the reference's time
 
@@ -539,11 +571,13 @@ def goal_lines(rows, default):
     full, full_q = cut(err(r, "rmse"), err(base, "rmse")), \
         cut(err(r, "rmse_q"), err(base, "rmse_q"))
     raw, raw_q = cut(r["rmse"], base["rmse"]), cut(r["rmse_q"], base["rmse_q"])
+    ceiling = noise_ceiling(rows, base)
     return [f"{head}: {'met' if full >= GOAL_CUT else 'missed'} at "
             f"{r['samples']} spp ({100 * r['total_s'] / ref['render_s']:.1f}"
             f" % of it): {full:.1f} % less at full resolution, {full_q:.1f} "
             f"% at quarter resolution (against the reference itself, with "
-            f"its noise: {raw:.1f} % and {raw_q:.1f} %)"]
+            f"its noise: {raw:.1f} % and {raw_q:.1f} %)"] + \
+        ([f"    {ceiling}"] if ceiling else [])
 
 
 def crop_box(mask, pad=0.12):

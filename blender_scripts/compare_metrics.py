@@ -166,6 +166,17 @@ def all_metrics(img, ref, mask, exposure, halves=None):
     }
 
 
+def render_noise(error_n, n, error_m, m):
+    """The RMSE that a render's own noise contributes at n samples, from
+    its errors against the (noise-free) reference at n and at m > n
+    samples: bias is the same at both and noise variance goes as 1/samples,
+    so error_n^2 - error_m^2 = noise_n^2 (1 - n/m). nan where the errors do
+    not fall (noise too small to see against the bias)."""
+    if not (m > n > 0) or not (error_n > error_m >= 0):
+        return float("nan")
+    return float(np.sqrt((error_n ** 2 - error_m ** 2) / (1.0 - n / m)))
+
+
 def interp_samples(samples, errors, target):
     """The sample count at which a random-walk series (samples ascending,
     errors against the reference) reaches `target`, interpolating

@@ -74,6 +74,8 @@ def test_compare_quick(tmp_path):
     md = (out / "results.md").read_text()
     assert "## Summary" in md and "random walk reaches it" in md
     assert "  goal: 30 % less error than no-sss" in md
+    # The noise of the 16-spp render, from its errors at 16 and 64 spp.
+    assert "the render's own noise is" in md
     # EEVEE ran (under xvfb-run) or says why not.
     assert any(r["renderer"] == "eevee" for r in rows) or "EEVEE" in md
 

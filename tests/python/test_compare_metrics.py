@@ -80,6 +80,20 @@ def test_noise_corrected_rmse_removes_the_reference_noise():
     assert np.isnan(cm.all_metrics(biased, ref, mask, 1.0)["rmse_c"])
 
 
+def test_render_noise_from_two_sample_counts():
+    bias, sigma = 0.03, 0.4  # noise RMSE sigma / sqrt(samples)
+
+    def error(n):
+        return float(np.hypot(bias, sigma / np.sqrt(n)))
+    assert cm.render_noise(error(64), 64, error(256), 256) == \
+        pytest.approx(sigma / 8)
+    assert cm.render_noise(error(16), 16, error(64), 64) == \
+        pytest.approx(sigma / 4)
+    # Errors that do not fall, or counts in the wrong order: unknown.
+    assert np.isnan(cm.render_noise(0.05, 16, 0.05, 64))
+    assert np.isnan(cm.render_noise(error(64), 64, error(16), 16))
+
+
 def test_ssim_properties():
     ref, mask = images()
     x = cm.display_luma(ref, 1.0)
