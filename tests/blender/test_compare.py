@@ -69,6 +69,7 @@ def test_compare_quick(tmp_path):
     for r in rows:
         c, raw = float(r["rmse_c"]), float(r["rmse"])
         assert 0 <= c <= raw + 1e-9, r
+        assert float(r["rmse_in_c"]) >= 0, r
     assert any(float(r["rmse_c"]) < float(r["rmse"]) for r in rw)
 
     md = (out / "results.md").read_text()
@@ -76,6 +77,7 @@ def test_compare_quick(tmp_path):
     assert "  goal: 30 % less error than no-sss" in md
     # The noise of the 16-spp render, from its errors at 16 and 64 spp.
     assert "the render's own noise is" in md
+    assert "away from silhouettes" in md
     # EEVEE ran (under xvfb-run) or says why not.
     assert any(r["renderer"] == "eevee" for r in rows) or "EEVEE" in md
 

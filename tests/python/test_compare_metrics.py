@@ -80,6 +80,35 @@ def test_noise_corrected_rmse_removes_the_reference_noise():
     assert np.isnan(cm.all_metrics(biased, ref, mask, 1.0)["rmse_c"])
 
 
+def test_silhouettes_and_the_error_away_from_them():
+    index = np.zeros((12, 14))
+    index[3:9, 4:10] = 1
+    depth = np.full((12, 14), 10.0)
+    depth[3:9, 4:10] = 2.0
+    depth[5, 6] = 2.05  # a 2.5 % step: still the same surface
+    depth[5:7, 8:10] = 3.0  # a 50 % step inside the square
+    e = cm.silhouettes(index, depth)
+    ring = np.zeros_like(e)
+    ring[2:10, 3:11] = True
+    ring[4:8, 5:9] = False  # one pixel either side of the square's border
+    ring[2, 3] = ring[2, 10] = ring[9, 3] = ring[9, 10] = False  # corners
+    step = np.zeros_like(e)
+    step[4:8, 7:11] = True  # around the deeper 2x2 block
+    step[4, 7] = step[4, 10] = step[7, 7] = step[7, 10] = False
+    step[5:7, 8:10] = True
+    assert np.array_equal(e, ring | step)
+    assert not e[5, 6] and not e[0, 0]
+
+    truth = np.full((12, 14, 3), 0.5)
+    mask = index > 0
+    img = truth + 0.3 * e[..., None]  # wrong only on silhouettes
+    m = cm.all_metrics(img, truth, mask, 1.0, halves=(truth, truth),
+                       edges=e)
+    assert m["rmse_in_c"] == pytest.approx(0.0, abs=1e-12)
+    assert m["rmse_c"] > 0.1
+    assert np.isnan(cm.all_metrics(img, truth, mask, 1.0)["rmse_in_c"])
+
+
 def test_render_noise_from_two_sample_counts():
     bias, sigma = 0.03, 0.4  # noise RMSE sigma / sqrt(samples)
 
