@@ -63,21 +63,35 @@ def clear(scene):
             bpy.data.objects.remove(obj, do_unlink=True)
 
 
-def light(kind, name, energy, location, rotation, size=0.5):
+def light(kind, name, energy, location, rotation=(0, 0, 0), size=0.5,
+          target=None, angle=None):
+    """A light at location, turned by rotation or aimed at target; size is
+    an area light's, angle (degrees) a sun's."""
     data = bpy.data.lights.new(name, kind)
     data.energy = energy
     if kind == "AREA":
         data.size = size
+    if angle is not None:
+        data.angle = math.radians(angle)
     obj = bpy.data.objects.new(name, data)
     obj.location = location
     obj.rotation_euler = rotation
     bpy.context.scene.collection.objects.link(obj)
+    if target is not None:
+        aim(obj, target)
     return obj
 
 
 def aim(obj, target):
     direction = Vector(target) - obj.location
     obj.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
+
+
+def place_camera(scene, location, target, lens):
+    cam = scene.camera
+    cam.location = location
+    aim(cam, target)
+    cam.data.lens = lens
 
 
 def build_demo(scene, subsurface=0.02):
@@ -96,14 +110,9 @@ def build_demo(scene, subsurface=0.02):
     bpy.ops.mesh.primitive_plane_add(size=4, location=(0, 0.6, 0),
                                      rotation=(math.pi / 2, 0, 0))
     assign(bpy.context.active_object, backdrop)
-    light("AREA", "Key", 12.0, (-0.7, -0.3, 0.2), (0, 0, 0), 0.3)
-    aim(scene.objects["Key"], (0, 0, 0))
-    light("SPOT", "Back", 60.0, (0.15, 0.45, 0.1), (0, 0, 0))
-    aim(scene.objects["Back"], (0, 0, 0))
-    cam = scene.camera
-    cam.location = (0.0, -0.85, 0.02)
-    aim(cam, (0, 0, 0))
-    cam.data.lens = 85
+    light("AREA", "Key", 12.0, (-0.7, -0.3, 0.2), size=0.3, target=(0, 0, 0))
+    light("SPOT", "Back", 60.0, (0.15, 0.45, 0.1), target=(0, 0, 0))
+    place_camera(scene, (0.0, -0.85, 0.02), (0, 0, 0), 85)
 
 
 def build_two(scene, scatter=True):
@@ -207,15 +216,11 @@ def build_marble(scene):
     bpy.ops.mesh.primitive_plane_add(size=30, location=(0, 2, 0))
     assign(bpy.context.active_object, floor)
     # A small sun: hard shadows and terminators, where scattering shows.
-    light("SUN", "Key", 4.0, (-4.0, -1.5, 2.5), (0, 0, 0))
-    scene.objects["Key"].data.angle = math.radians(1.0)
-    aim(scene.objects["Key"], (0, 1.5, 0.3))
-    light("AREA", "Back", 300.0, (1.5, 8.0, 1.2), (0, 0, 0), 1.5)
-    aim(scene.objects["Back"], (0, 1.5, 0.3))
-    cam = scene.camera
-    cam.location = (0.0, -3.6, 1.2)
-    aim(cam, (0.1, 1.5, 0.3))
-    cam.data.lens = 40
+    light("SUN", "Key", 4.0, (-4.0, -1.5, 2.5), target=(0, 1.5, 0.3),
+          angle=1.0)
+    light("AREA", "Back", 300.0, (1.5, 8.0, 1.2), size=1.5,
+          target=(0, 1.5, 0.3))
+    place_camera(scene, (0.0, -3.6, 1.2), (0.1, 1.5, 0.3), 40)
     scale_scene(scene, 0.04)
 
 
@@ -266,15 +271,11 @@ def build_mixed(scene):
     assign(bpy.context.active_object, floor)
     # A small sun from the front right: the pillar's hard shadow crosses
     # the skin sphere; a weak back light rims both.
-    light("SUN", "Key", 4.0, (1.8, -4.6, 2.5), (0, 0, 0))
-    scene.objects["Key"].data.angle = math.radians(1.0)
-    aim(scene.objects["Key"], (-0.55, 0.3, 0.45))
-    light("AREA", "Back", 80.0, (0.4, 2.6, 1.2), (0, 0, 0), 0.8)
-    aim(scene.objects["Back"], (0, 0.3, 0.45))
-    cam = scene.camera
-    cam.location = (0.0, -2.5, 0.8)
-    aim(cam, (0.0, 0.3, 0.45))
-    cam.data.lens = 50
+    light("SUN", "Key", 4.0, (1.8, -4.6, 2.5), target=(-0.55, 0.3, 0.45),
+          angle=1.0)
+    light("AREA", "Back", 80.0, (0.4, 2.6, 1.2), size=0.8,
+          target=(0, 0.3, 0.45))
+    place_camera(scene, (0.0, -2.5, 0.8), (0.0, 0.3, 0.45), 50)
 
 
 def build_slab(scene):
@@ -288,12 +289,8 @@ def build_slab(scene):
     slab = bpy.context.active_object
     slab.scale = (0.3, 0.015, 0.3)
     assign(slab, skin)
-    light("AREA", "Back", 30.0, (0.0, 0.5, 0.0), (0, 0, 0), 0.4)
-    aim(scene.objects["Back"], (0, 0, 0))
-    cam = scene.camera
-    cam.location = (0.0, -1.0, 0.0)
-    aim(cam, (0, 0, 0))
-    cam.data.lens = 50
+    light("AREA", "Back", 30.0, (0.0, 0.5, 0.0), size=0.4, target=(0, 0, 0))
+    place_camera(scene, (0.0, -1.0, 0.0), (0, 0, 0), 50)
 
 
 def main():
