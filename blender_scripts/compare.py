@@ -249,16 +249,53 @@ def run_rw(bench, args):
         bench.add("cycles", "random-walk", n, seconds, 0.0,
                   rgb(ch, "Combined"))
     n = args.rw_samples[-1]
-    halves, seconds = [], 0.0
-    for k in (1, 2):
-        scene.cycles.samples = n // 2
-        scene.cycles.seed = seed + k * REF_SEED_OFFSET
-        seconds += render(scene)
-        ch = save_result(scene, os.path.join(bench.work, f"rw_{n}_{k}.exr"))
-        halves.append(rgb(ch, "Combined").astype(np.float32))
-    bench.ref_halves = tuple(halves)
+    halves, seconds = render_reference(
+        scene, n, os.path.join(bench.work, f"rw_{n}"))
+    bench.ref_halves = halves
     bench.add("cycles", "random-walk (ref)", n, seconds, 0.0,
               (halves[0] + halves[1]) / 2)
+
+
+def render_reference(scene, samples, path_stem):
+    """The reference: two renders of samples/2 with two seeds other than
+    the scene's (saved as path_stem_1.exr, _2.exr), so that its noise is
+    independent of the other renders' and measurable from the difference
+    of the two. Returns ((half_1, half_2) as RGB arrays, seconds); the
+    scene's seed is left as it was."""
+    seed = scene.cycles.seed
+    halves, seconds = [], 0.0
+    try:
+        for k in (1, 2):
+            scene.cycles.samples = samples // 2
+            scene.cycles.seed = seed + k * REF_SEED_OFFSET
+            seconds += render(scene)
+            ch = save_result(scene, f"{path_stem}_{k}.exr")
+            halves.append(rgb(ch, "Combined").astype(np.float32))
+    finally:
+        scene.cycles.seed = seed
+    return tuple(halves), seconds
+
+
+def render_sss_off(scene, found, passes, description):
+    """Render with material SSS switched off (restored afterwards); write
+    the passes and the scene description the library reads. Returns the
+    render's seconds."""
+    from separable_sss import pipeline
+    from separable_sss.switch_off import switched_off
+    with switched_off(scene, found):
+        seconds = render(scene)
+        pipeline.save_passes(scene, passes)
+        pipeline.write_description(scene, found, description)
+    return seconds
+
+
+def scattering_pixels(ch, found):
+    """(mask of the scattering materials' pixels, material index, depth)
+    from a pass file."""
+    idx = np.rint(single(ch, "IndexMA"))
+    depth = single(ch, "Depth")
+    mask = np.isin(idx, [f.pass_index for f in found.found]) & (depth < 1e9)
+    return mask, idx, depth
 
 
 def apply_methods(bench, renderer, samples, render_s, inp, desc, base_rgb):
@@ -289,7 +326,6 @@ def apply_methods(bench, renderer, samples, render_s, inp, desc, base_rgb):
 
 def run_sss_off(bench, args):
     from separable_sss import pipeline
-    from separable_sss.switch_off import switched_off
     scene = open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
     if not found.found:
@@ -298,16 +334,10 @@ def run_sss_off(bench, args):
         scene.cycles.samples = n
         inp = os.path.join(bench.work, f"cycles_{n}_passes.exr")
         desc = os.path.join(bench.work, f"cycles_{n}_scene.json")
-        with switched_off(scene, found):
-            seconds = render(scene)
-            pipeline.save_passes(scene, inp)
-            pipeline.write_description(scene, found, desc)
+        seconds = render_sss_off(scene, found, inp, desc)
         ch = read_exr(inp)
         if n == max(args.samples):
-            indices = {f.pass_index for f in found.found}
-            idx = np.rint(single(ch, "IndexMA"))
-            depth = single(ch, "Depth")
-            bench.mask = np.isin(idx, list(indices)) & (depth < 1e9)
+            bench.mask, idx, depth = scattering_pixels(ch, found)
             bench.edges = cm.silhouettes(idx, depth)
         apply_methods(bench, "cycles", n, seconds, inp, desc,
                       rgb(ch, "Combined"))

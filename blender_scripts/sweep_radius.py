@@ -104,7 +104,6 @@ def scale_subsurface(found, scale):
 
 def one_scale(args, scale, default_code, work):
     from separable_sss import native, pipeline
-    from separable_sss.switch_off import switched_off
     scene = compare.open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
     if not found.found:
@@ -114,18 +113,9 @@ def one_scale(args, scale, default_code, work):
     radius = max(max(f.radius) for f in found.found)
     kernel = max(pipeline.kernel_pixels(scene, f) for f in found.found)
 
-    # The reference as in compare.py: two halves with two other seeds, so
-    # that its own noise comes out of the errors.
-    seed = scene.cycles.seed
-    halves = []
-    for k in (1, 2):
-        scene.cycles.samples = args.ref_samples // 2
-        scene.cycles.seed = seed + k * compare.REF_SEED_OFFSET
-        compare.render(scene)
-        halves.append(compare.rgb(read_exr(_save(scene, work, f"ref_{k}")),
-                                  "Combined"))
+    halves, _ = compare.render_reference(scene, args.ref_samples,
+                                         os.path.join(work, "ref"))
     ref = (halves[0] + halves[1]) / 2
-    scene.cycles.seed = seed
 
     rows = []
     for n in args.samples:
@@ -133,14 +123,9 @@ def one_scale(args, scale, default_code, work):
         inp = os.path.join(work, f"off_{n}_passes.exr")
         desc = os.path.join(work, f"off_{n}_scene.json")
         out = os.path.join(work, f"off_{n}_sss.exr")
-        with switched_off(scene, found):
-            seconds = compare.render(scene)
-            pipeline.save_passes(scene, inp)
-            pipeline.write_description(scene, found, desc)
+        seconds = compare.render_sss_off(scene, found, inp, desc)
         ch = read_exr(inp)
-        idx = compare.np.rint(compare.single(ch, "IndexMA"))
-        mask = compare.np.isin(idx, [f.pass_index for f in found.found]) & \
-            (compare.single(ch, "Depth") < 1e9)
+        mask = compare.scattering_pixels(ch, found)[0]
         base = compare.rgb(ch, "Combined")
         with native.Scene(desc) as sc:
             t = sc.process(inp, out, method=default_code)
@@ -160,13 +145,6 @@ def one_scale(args, scale, default_code, work):
             f"RMSE {e0:.4g} -> {e1:.4g} ({rows[-1]['cut']:.1f} % less), "
             f"quarter {q0:.4g} -> {q1:.4g} ({rows[-1]['cut_q']:.1f} % less)")
     return rows
-
-
-def _save(scene, work, name):
-    from separable_sss import pipeline
-    path = os.path.join(work, f"{name}.exr")
-    pipeline.save_passes(scene, path)
-    return path
 
 
 def _cut(before, after):
