@@ -34,7 +34,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep clean
+.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -111,24 +111,38 @@ check:
 		sh tests/run_c_tests.sh $(BUILD)/check \
 		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS))
 
-# The add-on as Blender installs it: module separable_sss with the library
-# inside (Edit > Preferences > Add-ons > Install...).
-ADDON_FILES := $(sort $(wildcard addon/separable_sss/*.py addon/separable_sss/presets/*/*.py))
+# The add-on as Blender installs it, from one code base: the legacy zip
+# (3.4: Preferences > Add-ons > Install, the library beside the code) and
+# the extension (4.2+: Get Extensions > Install from Disk, the library in a
+# platform wheel under wheels/).
+ADDON_FILES := $(sort $(wildcard addon/separable_sss/*.py addon/separable_sss/*.toml addon/separable_sss/presets/*/*.py))
+ADDON_VERSION := $(shell sed -n 's/^version = "\(.*\)"/\1/p' addon/separable_sss/blender_manifest.toml)
+ADDON_PLATFORM := $(if $(filter aarch64,$(shell uname -m)),linux-arm64,linux-x64)
+EXTENSION_ZIP := $(BUILD)/separable_sss-$(ADDON_VERSION)-$(ADDON_PLATFORM).zip
 addon: $(BUILD)/separable_sss.zip
-$(BUILD)/separable_sss.zip: $(ADDON_FILES) $(BUILD)/libsss.so
-	@rm -rf $(BUILD)/addon && mkdir -p $(BUILD)/addon
-	@cp -r addon/separable_sss $(BUILD)/addon/
-	@find $(BUILD)/addon -name __pycache__ -prune -exec rm -rf {} +
-	@cp $(BUILD)/libsss.so $(BUILD)/addon/separable_sss/
-	@rm -f $@.tmp && cd $(BUILD)/addon && $(PYTHON) -m zipfile -c ../separable_sss.zip.tmp separable_sss
-	@mv $@.tmp $@ && echo "add-on: $@"
+$(BUILD)/separable_sss.zip: $(ADDON_FILES) $(BUILD)/libsss.so scripts/build_addon.py
+	@$(PYTHON) scripts/build_addon.py --library $(BUILD)/libsss.so --out $(BUILD)
+
+# Supported Blenders: Debian's blender (3.4) and, from PyPI, Blender as a
+# Python module (bpy, pinned), each in a virtual environment under the
+# build folder with a `blender` command line (scripts/bpy_blender.py):
+# BLENDER=$(BUILD)/bpy-4.5.15/bin/blender runs demo or compare on 4.5.
+BLENDER ?= blender
+BPY_VERSIONS ?= 4.5.15
+BPY_BLENDERS := $(patsubst %,$(BUILD)/bpy-%/bin/blender,$(BPY_VERSIONS))
+BLENDERS ?= $(BLENDER) $(BPY_BLENDERS)
+bpy: $(BPY_BLENDERS)
+$(BUILD)/bpy-%/bin/blender: scripts/install-bpy.sh scripts/bpy_blender.py
+	@sh scripts/install-bpy.sh $* $(abspath $(BUILD))/bpy-$*
 
 # Blender's own Python runs these (they import bpy); each file in its own
-# Blender process, with an empty user scripts folder.
-BLENDER ?= blender
+# Blender process, with an empty user folder, on every supported Blender.
 BLENDER_TESTS := $(sort $(wildcard tests/blender/test_*.py))
-blender-test: all addon
-	@bash scripts/blender-tests.sh $(BLENDER) $(abspath $(BUILD)) $(BLENDER_TESTS)
+blender-test: all addon $(filter $(BUILD)/%,$(BLENDERS))
+	@status=0; for b in $(BLENDERS); do \
+		bash scripts/blender-tests.sh $$b $(abspath $(BUILD)) \
+			$(BLENDER_TESTS) || status=1; \
+	done; exit $$status
 
 $(BUILD)/sss-demo: examples/demo.c tests/synth.h $(BUILD)/libsss.so
 	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \

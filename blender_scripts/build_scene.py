@@ -31,6 +31,10 @@ import traceback
 import bpy
 from mathutils import Vector
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__))), "addon"))
+from separable_sss import blender_compat as compat  # noqa: E402
+
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -44,11 +48,12 @@ def parse_args():
 
 
 def material(name, **inputs):
+    """A Principled BSDF material, in Blender 3.x's terms (base, subsurface,
+    radius, subsurface_color, roughness), the same look on every version
+    (blender_compat.set_principled)."""
     mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
-    for key, value in inputs.items():
-        bsdf.inputs[key].default_value = value
+    bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
+    compat.set_principled(bsdf, **inputs)
     return mat
 
 
@@ -96,17 +101,17 @@ def place_camera(scene, location, target, lens):
 
 def build_demo(scene, subsurface=0.02):
     skin = material("Skin", **{
-        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": subsurface,
-        "Subsurface Radius": (1.0, 0.35, 0.2),
-        "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.45})
+        "base": (0.8, 0.55, 0.45, 1.0), "subsurface": subsurface,
+        "radius": (1.0, 0.35, 0.2),
+        "subsurface_color": (0.85, 0.45, 0.35, 1.0), "roughness": 0.45})
     bpy.ops.mesh.primitive_monkey_add(size=0.22, location=(0, 0, 0))
     head = bpy.context.active_object
     mod = head.modifiers.new("smooth", "SUBSURF")
     mod.levels = mod.render_levels = 2
     bpy.ops.object.shade_smooth()
     assign(head, skin)
-    backdrop = material("Backdrop", **{"Base Color": (0.05, 0.05, 0.06, 1),
-                                       "Roughness": 0.9})
+    backdrop = material("Backdrop", **{"base": (0.05, 0.05, 0.06, 1),
+                                       "roughness": 0.9})
     bpy.ops.mesh.primitive_plane_add(size=4, location=(0, 0.6, 0),
                                      rotation=(math.pi / 2, 0, 0))
     assign(bpy.context.active_object, backdrop)
@@ -117,15 +122,15 @@ def build_demo(scene, subsurface=0.02):
 
 def build_two(scene, scatter=True):
     skin = material("Skin", **{
-        "Base Color": (0.8, 0.6, 0.5, 1.0),
-        "Subsurface": 0.5 if scatter else 0.0,
-        "Subsurface Radius": (1.0, 0.4, 0.2),
-        "Subsurface Color": (0.9, 0.5, 0.4, 1.0)})
+        "base": (0.8, 0.6, 0.5, 1.0),
+        "subsurface": 0.5 if scatter else 0.0,
+        "radius": (1.0, 0.4, 0.2),
+        "subsurface_color": (0.9, 0.5, 0.4, 1.0)})
     jade = material("Jade", **{
-        "Base Color": (0.3, 0.7, 0.4, 1.0),
-        "Subsurface": 0.5 if scatter else 0.0,
-        "Subsurface Radius": (0.3, 1.2, 0.6),
-        "Subsurface Color": (0.3, 0.8, 0.5, 1.0), "Roughness": 0.2})
+        "base": (0.3, 0.7, 0.4, 1.0),
+        "subsurface": 0.5 if scatter else 0.0,
+        "radius": (0.3, 1.2, 0.6),
+        "subsurface_color": (0.3, 0.8, 0.5, 1.0), "roughness": 0.2})
     # Jade's base colour comes from a texture: switching SSS off must then
     # insert a Mix node rather than set a value.
     tree = jade.node_tree
@@ -133,8 +138,8 @@ def build_two(scene, scatter=True):
     noise.inputs["Scale"].default_value = 8.0
     tree.links.new(noise.outputs["Color"],
                    tree.nodes["Principled BSDF"].inputs["Base Color"])
-    floor = material("Floor", **{"Base Color": (0.4, 0.4, 0.45, 1.0),
-                                 "Roughness": 0.3})
+    floor = material("Floor", **{"base": (0.4, 0.4, 0.45, 1.0),
+                                 "roughness": 0.3})
     bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, location=(-1.1, 0, 1))
     bpy.ops.object.shade_smooth()
     assign(bpy.context.active_object, skin)
@@ -148,7 +153,11 @@ def build_two(scene, scatter=True):
 
 
 def random_walk(mat):
-    mat.node_tree.nodes["Principled BSDF"].subsurface_method = "RANDOM_WALK"
+    """Cycles' random walk with the radius adapted to the colour (3.x's
+    Random Walk, 4.x's Random Walk (Skin)): the method the calibration and
+    the comparison were measured with."""
+    compat.set_method(mat.node_tree.nodes["Principled BSDF"],
+                      "RANDOM_WALK_SKIN")
     return mat
 
 
@@ -187,11 +196,11 @@ def build_marble(scene):
     object's radius. The same world-space radius covers fewer pixels the
     farther the object is, so every method's depth handling shows."""
     marble = random_walk(material("Marble", **{
-        "Base Color": (0.83, 0.79, 0.75, 1.0), "Subsurface": 0.0085,
-        "Subsurface Radius": (1.0, 0.66, 0.47),
-        "Subsurface Color": (0.9, 0.88, 0.84, 1.0), "Roughness": 0.25}))
-    floor = material("Floor", **{"Base Color": (0.12, 0.12, 0.13, 1.0),
-                                 "Roughness": 0.8})
+        "base": (0.83, 0.79, 0.75, 1.0), "subsurface": 0.0085,
+        "radius": (1.0, 0.66, 0.47),
+        "subsurface_color": (0.9, 0.88, 0.84, 1.0), "roughness": 0.25}))
+    floor = material("Floor", **{"base": (0.12, 0.12, 0.13, 1.0),
+                                 "roughness": 0.8})
     # Laid out at 25 times the size, then scaled down with the lights and
     # the camera (scale_scene): the layout reads in round numbers.
     shapes = (("sphere", (-1.3, -1.0, 0.35)), ("cube", (0.1, 0.2, 0.35)),
@@ -233,13 +242,13 @@ def build_mixed(scene):
     object's thickness: the skin's red 11 cm on a 45 cm sphere, the jade's
     green 5.5 cm across the bangle's 22 cm band."""
     skin = random_walk(material("Skin", **{
-        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.11,
-        "Subsurface Radius": (1.0, 0.35, 0.2),
-        "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.45}))
+        "base": (0.8, 0.55, 0.45, 1.0), "subsurface": 0.11,
+        "radius": (1.0, 0.35, 0.2),
+        "subsurface_color": (0.85, 0.45, 0.35, 1.0), "roughness": 0.45}))
     jade = random_walk(material("Jade", **{
-        "Base Color": (0.3, 0.7, 0.4, 1.0), "Subsurface": 0.055,
-        "Subsurface Radius": (0.3, 1.0, 0.5),
-        "Subsurface Color": (0.35, 0.8, 0.5, 1.0), "Roughness": 0.2}))
+        "base": (0.3, 0.7, 0.4, 1.0), "subsurface": 0.055,
+        "radius": (0.3, 1.0, 0.5),
+        "subsurface_color": (0.35, 0.8, 0.5, 1.0), "roughness": 0.2}))
     tree = skin.node_tree
     noise = tree.nodes.new("ShaderNodeTexNoise")
     noise.inputs["Scale"].default_value = 25.0
@@ -249,10 +258,10 @@ def build_mixed(scene):
     tree.links.new(noise.outputs["Fac"], bump.inputs["Height"])
     tree.links.new(bump.outputs["Normal"],
                    tree.nodes["Principled BSDF"].inputs["Normal"])
-    grey = material("Pillar", **{"Base Color": (0.35, 0.35, 0.37, 1.0),
-                                 "Roughness": 0.6})
-    floor = material("Floor", **{"Base Color": (0.1, 0.1, 0.11, 1.0),
-                                 "Roughness": 0.8})
+    grey = material("Pillar", **{"base": (0.35, 0.35, 0.37, 1.0),
+                                 "roughness": 0.6})
+    floor = material("Floor", **{"base": (0.1, 0.1, 0.11, 1.0),
+                                 "roughness": 0.8})
     bpy.ops.mesh.primitive_uv_sphere_add(radius=0.45, location=(-0.55, 0.3,
                                                                 0.45),
                                          segments=48, ring_count=24)
@@ -282,9 +291,9 @@ def build_slab(scene):
     """A thin skin slab (1.5 cm) facing the camera, lit only from behind by
     an area light: its front glows only through transmission."""
     skin = random_walk(material("Skin", **{
-        "Base Color": (0.8, 0.55, 0.45, 1.0), "Subsurface": 0.02,
-        "Subsurface Radius": (1.0, 0.5, 0.25),
-        "Subsurface Color": (0.85, 0.45, 0.35, 1.0), "Roughness": 0.6}))
+        "base": (0.8, 0.55, 0.45, 1.0), "subsurface": 0.02,
+        "radius": (1.0, 0.5, 0.25),
+        "subsurface_color": (0.85, 0.45, 0.35, 1.0), "roughness": 0.6}))
     bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0))
     slab = bpy.context.active_object
     slab.scale = (0.3, 0.015, 0.3)
@@ -310,8 +319,7 @@ def main():
         build_slab(scene)
     else:
         build_two(scene, scatter=args.kind == "two")
-    scene.world.use_nodes = True
-    scene.world.node_tree.nodes["Background"].inputs["Color"] \
+    compat.ensure_nodes(scene.world).nodes["Background"].inputs["Color"] \
         .default_value = (0.02, 0.025, 0.03, 1.0)
     render = scene.render
     render.engine = "CYCLES"

@@ -4,7 +4,7 @@ that libsss blurs, on flat slabs, headless:
     blender -b --factory-startup --python-exit-code 1 \\
         --python blender_scripts/calibrate.py -- --out DIR \\
         [--part energy,edge,texture] [--samples 128] [--size 64]
-        [--radii 0.05,0.2] [--method RANDOM_WALK]
+        [--radii 0.05,0.2] [--method RANDOM_WALK_SKIN]
 
 energy: a large thick box (2 x 2 m face, 1 m deep) faces an orthographic
   camera that sees only the middle 0.2 m of its face, under a uniform white
@@ -48,6 +48,7 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
+from separable_sss import blender_compat as compat  # noqa: E402
 from exr_io import read_exr  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
@@ -68,7 +69,10 @@ def parse_args():
     p.add_argument("--samples", type=int, default=128)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--radii", default="0.05")
-    p.add_argument("--method", default="RANDOM_WALK")
+    p.add_argument("--method", default="RANDOM_WALK_SKIN",
+                   choices=compat.METHODS,
+                   help="by Blender 4.x's names (3.x's Random Walk is "
+                   "RANDOM_WALK_SKIN, its Fixed Radius RANDOM_WALK)")
     p.add_argument("--light", default="world", choices=("world", "sun"))
     p.add_argument("--sun-angle", type=float, default=0.0,
                    help="energy with --light sun: degrees from the normal")
@@ -104,11 +108,11 @@ def reset():
 def slab(scene):
     """The box: face at y = 0 towards the camera, 6 x 6 m, 4 m deep."""
     mat = bpy.data.materials.new("Slab")
-    mat.use_nodes = True
     mat.pass_index = 1
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Specular"].default_value = 0.0
-    bsdf.inputs["Roughness"].default_value = 0.5
+    bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
+    compat.principled_input(bsdf, "specular").default_value = \
+        compat.SPECULAR_OFF
+    compat.principled_input(bsdf, "roughness").default_value = 0.5
     mesh = bpy.data.meshes.new("Slab")
     obj = bpy.data.objects.new("Slab", mesh)
     scene.collection.objects.link(obj)
@@ -126,8 +130,7 @@ def slab(scene):
 def world(scene, strength):
     if scene.world is None:
         scene.world = bpy.data.worlds.new("World")
-    scene.world.use_nodes = True
-    bg = scene.world.node_tree.nodes["Background"]
+    bg = compat.ensure_nodes(scene.world).nodes["Background"]
     bg.inputs["Color"].default_value = (1, 1, 1, 1)
     bg.inputs["Strength"].default_value = strength
 
@@ -181,16 +184,15 @@ def setup_render(scene, args, out_path):
 
 
 def set_material(mat, colour, radius, subsurface, method):
+    """Base and scattering colour `colour`, the radius r in metres for
+    subsurface > 0 (Radius x Subsurface, or x Scale from 4.0), and the
+    method by 4.x's name."""
     bsdf = mat.node_tree.nodes["Principled BSDF"]
-    bsdf.subsurface_method = method
-    bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
-    bsdf.inputs["Subsurface Color"].default_value = (*colour, 1.0)
-    bsdf.inputs["Subsurface"].default_value = subsurface
-    bsdf.inputs["Subsurface Radius"].default_value = (1.0, 1.0, 1.0)
-    # Radius in metres = Subsurface Radius x Subsurface: keep it r.
-    if subsurface > 0:
-        bsdf.inputs["Subsurface Radius"].default_value = \
-            (radius / subsurface,) * 3
+    compat.set_method(bsdf, method)
+    compat.set_principled(
+        bsdf, base=(*colour, 1.0), subsurface_color=(*colour, 1.0),
+        subsurface=subsurface,
+        radius=(radius / subsurface,) * 3 if subsurface > 0 else (1.0,) * 3)
 
 
 def render_to(scene, path, seed):
@@ -199,10 +201,7 @@ def render_to(scene, path, seed):
     if bpy.ops.render.render() != {"FINISHED"}:
         raise RuntimeError("render failed")
     seconds = time.perf_counter() - t0
-    s = scene.render.image_settings
-    s.file_format = "OPEN_EXR_MULTILAYER"
-    s.color_depth = "32"
-    s.exr_codec = "ZIP"
+    compat.set_multilayer_exr(scene.render.image_settings)
     bpy.data.images["Render Result"].save_render(path, scene=scene)
     return read_exr(path), seconds
 
@@ -431,11 +430,12 @@ def part_texture(args):
         tree.links.new(sep.outputs["Vector"], checker.inputs["Vector"])
         set_material(mat, (0.5, 0.5, 0.5), radius, 1.0, args.method)
         for sock in ("Base Color", "Subsurface Color"):
-            tree.links.new(checker.outputs["Color"], bsdf.inputs[sock])
+            if sock in bsdf.inputs:
+                tree.links.new(checker.outputs["Color"], bsdf.inputs[sock])
         rw, _ = render_to(scene, os.path.join(args.out, "work",
                                               f"tex_rw_{radius}.exr"), 2)
         rw = rgb(rw, "Combined")
-        bsdf.inputs["Subsurface"].default_value = 0.0
+        compat.principled_input(bsdf, "subsurface").default_value = 0.0
         inp = os.path.join(args.out, "work", f"tex_off_{radius}.exr")
         offch, _ = render_to(scene, inp, 1)
         off = rgb(offch, "Combined")

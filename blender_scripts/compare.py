@@ -58,6 +58,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, HERE)
+from separable_sss import blender_compat as compat  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -121,8 +122,8 @@ def maybe_reexec_with_display(args):
         args.no_eevee = True
         return
     env = dict(os.environ, SSS_COMPARE_XVFB="1")
-    cmd = [xvfb, "-a", "-s", "-screen 0 640x480x24", bpy.app.binary_path] \
-        + sys.argv[1:]
+    cmd = [xvfb, "-a", "-s", "-screen 0 640x480x24",
+           compat.blender_command()] + sys.argv[1:]
     log("no $DISPLAY: running again under xvfb-run for EEVEE")
     sys.stdout.flush()
     sys.exit(subprocess.call(cmd, env=env))
@@ -394,12 +395,12 @@ def run_eevee(bench, args):
     from separable_sss import pipeline
     from separable_sss.switch_off import switched_off
     n = args.eevee_samples
-    scene = open_scene(args, "BLENDER_EEVEE")
+    scene = open_scene(args, compat.EEVEE)
     seconds = render(scene)
     ch = save_result(scene, os.path.join(bench.work, f"eevee_{n}_own.exr"))
     bench.add("eevee", "eevee-sss", n, seconds, 0.0, rgb(ch, "Combined"))
 
-    scene = open_scene(args, "BLENDER_EEVEE")
+    scene = open_scene(args, compat.EEVEE)
     found = pipeline.analyse(scene)
     raw = os.path.join(bench.work, f"eevee_{n}_raw.exr")
     inp = os.path.join(bench.work, f"eevee_{n}_passes.exr")

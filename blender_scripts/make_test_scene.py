@@ -24,6 +24,10 @@ import traceback
 
 import bpy
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__))), "addon"))
+from separable_sss import blender_compat as compat  # noqa: E402
+
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -34,13 +38,15 @@ def parse_args():
     return p.parse_args(argv)
 
 
-def principled(name, pass_index, **inputs):
+def principled(name, pass_index, transmission=0.0, **inputs):
+    """A Principled BSDF material in 3.x's terms, the same look on every
+    version (blender_compat.set_principled)."""
     mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
     mat.pass_index = pass_index
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
-    for key, value in inputs.items():
-        bsdf.inputs[key].default_value = value
+    bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
+    compat.set_principled(bsdf, **inputs)
+    compat.principled_input(bsdf, "transmission").default_value = \
+        transmission
     return mat
 
 
@@ -58,18 +64,15 @@ def build_scene(size, samples):
         if obj.type == "MESH":
             bpy.data.objects.remove(obj, do_unlink=True)
 
-    skin = principled("Skin", 1, **{
-        "Base Color": (0.8, 0.6, 0.5, 1.0), "Subsurface": 0.4,
-        "Subsurface Radius": (0.3, 0.12, 0.06),
-        "Subsurface Color": (0.9, 0.5, 0.4, 1.0), "Roughness": 0.5})
-    floor = principled("Floor", 2, **{
-        "Base Color": (0.3, 0.35, 0.4, 1.0), "Roughness": 0.25})
-    glass = principled("Glass", 3, **{
-        "Base Color": (0.9, 0.95, 1.0, 1.0), "Transmission": 1.0,
-        "Roughness": 0.05})
+    skin = principled("Skin", 1, base=(0.8, 0.6, 0.5, 1.0), subsurface=0.4,
+                      radius=(0.3, 0.12, 0.06),
+                      subsurface_color=(0.9, 0.5, 0.4, 1.0), roughness=0.5)
+    floor = principled("Floor", 2, base=(0.3, 0.35, 0.4, 1.0),
+                       roughness=0.25)
+    glass = principled("Glass", 3, base=(0.9, 0.95, 1.0, 1.0),
+                       transmission=1.0, roughness=0.05)
     lamp = bpy.data.materials.new("Lamp")
-    lamp.use_nodes = True
-    nodes = lamp.node_tree.nodes
+    nodes = compat.ensure_nodes(lamp).nodes
     nodes.remove(nodes["Principled BSDF"])
     emit = nodes.new("ShaderNodeEmission")
     emit.inputs["Color"].default_value = (1.0, 0.8, 0.3, 1.0)
@@ -92,8 +95,7 @@ def build_scene(size, samples):
     sun.rotation_euler = (0.9, 0.3, 2.4)
 
     world = scene.world
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (
+    compat.ensure_nodes(world).nodes["Background"].inputs["Color"].default_value = (
         0.05, 0.08, 0.12, 1.0)
 
     render = scene.render
@@ -122,8 +124,7 @@ def build_scene(size, samples):
 
 def add_file_output(scene, base):
     """A multilayer File Output node: passes named without a layer."""
-    scene.use_nodes = True
-    tree = scene.node_tree
+    tree = compat.compositor_tree(scene, create=True)
     rl = next(n for n in tree.nodes if n.type == "R_LAYERS")
     out = tree.nodes.new("CompositorNodeOutputFile")
     out.format.file_format = "OPEN_EXR_MULTILAYER"
@@ -144,20 +145,18 @@ def scene_description(scene):
     cam = scene.camera.data
     materials = []
     for mat in bpy.data.materials:
-        if mat.pass_index == 0 or not mat.use_nodes:
+        if mat.pass_index == 0 or not compat.uses_nodes(mat):
             continue
         bsdf = mat.node_tree.nodes.get("Principled BSDF")
-        if not bsdf or bsdf.inputs["Subsurface"].default_value <= 0.0:
+        sss = compat.principled_sss(bsdf) if bsdf else None
+        if not sss or sss.weight <= 0.0:
             continue
-        factor = bsdf.inputs["Subsurface"].default_value
         scale = scene.unit_settings.scale_length
-        radius = [r * factor * scale
-                  for r in bsdf.inputs["Subsurface Radius"].default_value]
         materials.append({
             "pass_index": mat.pass_index, "name": mat.name,
             "profile": "burley", "mapping": "random-walk",
-            "radius": radius,
-            "albedo": list(bsdf.inputs["Subsurface Color"].default_value)[:3],
+            "radius": [r * scale for r in sss.radius],
+            "albedo": list(sss.color),
         })
     return {
         "version": 1,

@@ -33,6 +33,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, HERE)
+from separable_sss import blender_compat as compat  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -128,7 +129,7 @@ def slab_sweep(args):
                 slab.scale[1] = thick
                 mat = bpy.data.materials["Skin"]
                 bsdf = mat.node_tree.nodes["Principled BSDF"]
-                bsdf.inputs["Subsurface"].default_value = sub
+                compat.set_subsurface_factor(bsdf, sub)
                 bpy.context.view_layer.update()
                 path = os.path.join(work, f"{tag}_{kind}.exr")
                 if kind == "rw":

@@ -38,6 +38,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
 import compare  # noqa: E402  (also puts the add-on on sys.path)
+from separable_sss import blender_compat as compat  # noqa: E402
 import compare_metrics as cm  # noqa: E402
 from exr_io import read_exr  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
@@ -83,9 +84,9 @@ def parse_args():
 
 
 def scale_subsurface(found, scale):
-    """Multiply the Subsurface input of every scattering material's
-    Principled BSDF by scale (the radius is Subsurface x Subsurface
-    Radius)."""
+    """Multiply the input that scales the radius of every scattering
+    material's Principled BSDF (Subsurface, or Subsurface Scale from 4.0)
+    by scale."""
     done = set()
     for f in found.found:
         if f.material.name in done:
@@ -94,10 +95,10 @@ def scale_subsurface(found, scale):
         for node in f.material.node_tree.nodes:
             if node.type != "BSDF_PRINCIPLED":
                 continue
-            sock = node.inputs["Subsurface"]
+            sock = compat.radius_factor_input(node)
             if sock.is_linked:
                 raise RuntimeError(
-                    f"material {f.material.name!r}: Subsurface is driven "
+                    f"material {f.material.name!r}: {sock.name} is driven "
                     "by a link; the sweep scales only a value")
             sock.default_value *= scale
 

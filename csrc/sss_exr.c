@@ -302,6 +302,42 @@ static xpass *find_pass(const sss_exr *exr, const char *layer,
 	return NULL;
 }
 
+/* Blender 5.0 names render passes in full ("Diffuse Direct" where 3.x and
+ * 4.x write "DiffDir"); the library asks by the short names and reads
+ * either. */
+static const char *const full_pass_names[][2] = {
+	{"DiffDir", "Diffuse Direct"},        {"DiffInd", "Diffuse Indirect"},
+	{"DiffCol", "Diffuse Color"},         {"GlossDir", "Glossy Direct"},
+	{"GlossInd", "Glossy Indirect"},      {"GlossCol", "Glossy Color"},
+	{"TransDir", "Transmission Direct"},  {"TransInd", "Transmission Indirect"},
+	{"TransCol", "Transmission Color"},   {"Emit", "Emission"},
+	{"Env", "Environment"},               {"IndexMA", "Material Index"},
+};
+
+static const char *full_pass_name(const char *pass)
+{
+	for (size_t i = 0; i < sizeof full_pass_names / sizeof *full_pass_names;
+	     i++)
+		if (strcmp(full_pass_names[i][0], pass) == 0)
+			return full_pass_names[i][1];
+	return NULL;
+}
+
+/* A render pass by its short name, or by Blender 5.0's full name. */
+static const xpass *find_render_pass(const sss_exr *exr, const char *layer,
+                                     const char *pass)
+{
+	const xpass *p = find_pass(exr, layer, pass);
+	const char *full = p ? NULL : full_pass_name(pass);
+	return full ? find_pass(exr, layer, full) : p;
+}
+
+static int is_render_pass(const char *name, const char *pass)
+{
+	const char *full = full_pass_name(pass);
+	return strcmp(name, pass) == 0 || (full && strcmp(name, full) == 0);
+}
+
 /* A new, empty pass at the end (names copied); NULL when out of memory. */
 static xpass *append_pass(sss_exr *exr, const char *layer, size_t layer_len,
                           const char *pass, size_t pass_len)
@@ -918,7 +954,8 @@ sss_result sss_exr_find(const sss_exr *exr, const char *layer,
 {
 	if (!exr)
 		return SSS_ERR_INVALID_ARGUMENT;
-	const xpass *p = find_pass(exr, layer ? layer : "", pass ? pass : "");
+	const xpass *p = find_render_pass(exr, layer ? layer : "",
+	                                  pass ? pass : "");
 	if (!p)
 		return SSS_ERR_MISSING_PASS;
 	if (view)
@@ -1030,7 +1067,7 @@ sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
 	for (int32_t i = 0; i < exr->pass_count && !use; i++) {
 		const xpass *p = &exr->passes[i];
 		if (layer ? strcmp(p->layer, layer) == 0
-		          : strcmp(p->pass, "DiffDir") == 0 &&
+		          : is_render_pass(p->pass, "DiffDir") &&
 		            strcmp(p->layer, SSS_BACKLIGHT_LAYER) != 0)
 			use = p->layer;
 	}
@@ -1046,7 +1083,7 @@ sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
 
 	char missing[256] = "";
 	for (size_t t = 0; t < sizeof table / sizeof *table; t++) {
-		const xpass *p = find_pass(exr, use, table[t].name);
+		const xpass *p = find_render_pass(exr, use, table[t].name);
 		if (!p) {
 			if (table[t].required)
 				append(missing, sizeof missing, "%s%s",

@@ -941,6 +941,82 @@ static void test_compressions(void)
 }
 
 /* File Output node naming (no layer), plain RGB, longer components. */
+/* Blender 5.0 names its passes in full: the same render passes are found
+ * under "Diffuse Direct", "Material Index" and so on, and the short names
+ * still win where both are present. */
+static void test_blender5_pass_names(void)
+{
+	static const char *names[] = {
+		"ViewLayer.Combined.R", "ViewLayer.Combined.G",
+		"ViewLayer.Combined.B", "ViewLayer.Combined.A",
+		"ViewLayer.Depth.Z", "ViewLayer.Diffuse Color.R",
+		"ViewLayer.Diffuse Color.G", "ViewLayer.Diffuse Color.B",
+		"ViewLayer.Diffuse Direct.R", "ViewLayer.Diffuse Direct.G",
+		"ViewLayer.Diffuse Direct.B", "ViewLayer.Diffuse Indirect.R",
+		"ViewLayer.Diffuse Indirect.G", "ViewLayer.Diffuse Indirect.B",
+		"ViewLayer.Emission.R", "ViewLayer.Emission.G",
+		"ViewLayer.Emission.B", "ViewLayer.Glossy Direct.R",
+		"ViewLayer.Glossy Direct.G", "ViewLayer.Glossy Direct.B",
+		"ViewLayer.Material Index.X", "ViewLayer.Transmission Color.R",
+		"ViewLayer.Transmission Color.G", "ViewLayer.Transmission Color.B",
+		"SSSBackLight.Diffuse Direct.R", "SSSBackLight.Diffuse Direct.G",
+		"SSSBackLight.Diffuse Direct.B", "Zlayer.DiffDir.R",
+		"Zlayer.DiffDir.G", "Zlayer.DiffDir.B", "Zlayer.Diffuse Direct.R",
+		"Zlayer.Diffuse Direct.G", "Zlayer.Diffuse Direct.B",
+		"Zlayer.DiffCol.R", "Zlayer.DiffCol.G", "Zlayer.DiffCol.B",
+		"Zlayer.Depth.Z", "Zlayer.IndexMA.X"};
+	tfile f;
+	memset(&f, 0, sizeof f);
+	f.w = 6;
+	f.h = 5;
+	f.comp = EXR_COMPRESSION_ZIP;
+	f.nchan = (int)(sizeof names / sizeof *names);
+	for (int i = 0; i < f.nchan; i++) {
+		f.ch[i].name = names[i];
+		f.ch[i].type = EXR_PIXEL_FLOAT;
+		fill_channel(&f.ch[i], f.w, f.h);
+	}
+	char in[256];
+	tpath(in, sizeof in, "blender5.exr");
+	CHECK("exr.b5.write", write_test_exr(in, &f) == 0, "raw write");
+	sss_exr *exr = NULL;
+	CHECK_STATUS("exr.b5.read", SSS_OK,
+	             sss_exr_read(in, NULL, &exr, errbuf, sizeof errbuf));
+	if (exr) {
+		sss_passes ps;
+		const char *used = NULL;
+		sss_image dd, dc, di, ix, em, tc, bl, shortdd;
+		CHECK_STATUS("exr.b5.render", SSS_OK,
+		             sss_exr_render_passes(exr, NULL, &ps, &used, errbuf,
+		                                   sizeof errbuf));
+		sss_exr_find(exr, "ViewLayer", "Diffuse Direct", &dd);
+		sss_exr_find(exr, "ViewLayer", "Diffuse Color", &dc);
+		sss_exr_find(exr, "ViewLayer", "Diffuse Indirect", &di);
+		sss_exr_find(exr, "ViewLayer", "Material Index", &ix);
+		sss_exr_find(exr, "ViewLayer", "Emission", &em);
+		sss_exr_find(exr, "ViewLayer", "Transmission Color", &tc);
+		if (!used)
+			printf("  %s\n", errbuf);
+		CHECK("exr.b5.layer", used && !strcmp(used, "ViewLayer"),
+		      "layer %s", used ? used : "(null)");
+		CHECK("exr.b5.views", ps.diff_dir.data == dd.data &&
+		      ps.diff_col.data == dc.data && ps.diff_ind.data == di.data &&
+		      ps.index_ma.data == ix.data && ps.emit.data == em.data &&
+		      ps.trans_col.data == tc.data && ps.gloss_ind.data == NULL &&
+		      ps.depth.data != NULL, "5.0 names not read");
+		CHECK_STATUS("exr.b5.find_short", SSS_OK,
+		             sss_exr_find(exr, "SSSBackLight", "DiffDir", &bl));
+		CHECK_STATUS("exr.b5.render_short", SSS_OK,
+		             sss_exr_render_passes(exr, "Zlayer", &ps, &used,
+		                                   errbuf, sizeof errbuf));
+		sss_exr_find(exr, "Zlayer", "Diffuse Direct", &shortdd);
+		CHECK("exr.b5.short_wins", ps.diff_dir.data != shortdd.data &&
+		      ps.diff_dir.data != NULL, "the short name must win");
+		sss_exr_free(exr);
+	}
+	tfile_free(&f);
+}
+
 static void test_file_output_names(void)
 {
 	static const char *names[] = {"DiffDir.R", "DiffDir.G", "DiffDir.B",
@@ -1625,6 +1701,7 @@ int main(void)
 	test_round_trip();
 	test_compressions();
 	test_file_output_names();
+	test_blender5_pass_names();
 	test_single_pass();
 	test_tiled();
 	test_bad_files();

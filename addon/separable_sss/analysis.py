@@ -4,7 +4,8 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from .blender_compat import PRINCIPLED, principled_input
+from . import blender_compat as compat
+from .blender_compat import principled_input
 
 
 @dataclass
@@ -14,15 +15,16 @@ class Found:
     name: str
     pass_index: int
     node: bpy.types.Node          # the Principled or Subsurface node
-    radius: tuple                 # metres per channel (radius x factor)
-    color: tuple                  # Subsurface Color (or the SSS node's)
-    method: str                   # BURLEY, RANDOM_WALK, ...
-    linked_factor: bool = False   # Subsurface driven by a texture
+    radius: tuple                 # metres per channel
+    color: tuple                  # the scattering colour
+    method: str                   # BURLEY, RANDOM_WALK, RANDOM_WALK_SKIN
+    linked_factor: bool = False   # the SSS switch is driven by a texture
     # The albedo Cycles' random walk uses: the Principled BSDF's diffuse
-    # colour mix(Base Color, Subsurface Color, Subsurface) (the socket
-    # values; a texture's pixels come in through DiffCol instead).
+    # colour (socket values; a texture's pixels come in through DiffCol).
     albedo: tuple = None
-
+    # How much of the diffuse lobe scatters: Principled v2's Subsurface
+    # Weight (1 for 3.x's Subsurface factor and the Subsurface node).
+    weight: float = 1.0
 
 @dataclass
 class Analysis:
@@ -55,12 +57,21 @@ def _is_linked(node, name):
     return bool(sock and sock.is_linked)
 
 
-def _scatters(node):
-    """(factor, linked) for a Principled node's Subsurface input."""
-    sock = principled_input(node, "subsurface")
-    if sock.is_linked:
-        return 1.0, True
-    return float(sock.default_value), False
+def _principled_notes(mat, sss, switch):
+    """What the analysis cannot follow, for the panel and the report."""
+    notes = []
+    if switch in sss.linked:
+        notes.append(f"{mat.name}: {switch} is driven by a texture; it "
+                     "scatters everywhere with its full radius")
+    other = [n for n in sss.linked if n != switch and n != "Base Color"]
+    if other:
+        notes.append(f"{mat.name}: {', '.join(other)} driven by links; "
+                     "their unlinked values are used")
+    if abs(sss.ior - 1.4) > 1e-3 or abs(sss.anisotropy) > 1e-3:
+        notes.append(f"{mat.name}: Subsurface IOR {sss.ior:.3g} and "
+                     f"Anisotropy {sss.anisotropy:.3g} are ignored (the "
+                     "calibration assumes 1.4 and 0)")
+    return notes
 
 
 def analyse(scene):
@@ -68,49 +79,44 @@ def analyse(scene):
     result = Analysis()
     unit = scene.unit_settings.scale_length or 1.0
     for mat in scene_materials(scene):
-        if not mat.use_nodes or not mat.node_tree:
+        if not compat.uses_nodes(mat):
             continue
         settings = getattr(mat, "sss", None)
         for node in mat.node_tree.nodes:
             if node.type == "EMISSION" or (
                     node.type == "BSDF_PRINCIPLED" and
-                    _input_value(node, PRINCIPLED["emission_strength"]) and
-                    (_is_linked(node, PRINCIPLED["emission"]) or
-                     any(_input_value(node, PRINCIPLED["emission"])[:3]))):
+                    _input_value(node, compat.PRINCIPLED["emission_strength"])
+                    and (_is_linked(node, compat.PRINCIPLED["emission"]) or
+                         any(_input_value(node, compat.PRINCIPLED["emission"])
+                             [:3]))):
                 result.emits = True
             if node.type in ("BSDF_GLASS", "BSDF_REFRACTION") or (
                     node.type == "BSDF_PRINCIPLED" and
-                    (_is_linked(node, PRINCIPLED["transmission"]) or
-                     _input_value(node, PRINCIPLED["transmission"]) > 0)):
+                    (_is_linked(node, compat.PRINCIPLED["transmission"]) or
+                     _input_value(node, compat.PRINCIPLED["transmission"])
+                     > 0)):
                 result.transmits = True
         if settings is not None and settings.profile == "NONE":
             continue
         for node in mat.node_tree.nodes:
             found = None
             if node.type == "BSDF_PRINCIPLED":
-                factor, linked = _scatters(node)
-                if factor <= 0.0:
+                sss = compat.principled_sss(node)
+                if sss.weight <= 0.0:
                     continue
-                r = principled_input(node, "subsurface_radius").default_value
-                sscol = tuple(principled_input(node, "subsurface_color")
-                              .default_value[:3])
-                base = principled_input(node, "base").default_value[:3]
+                switch = compat.PRINCIPLED["subsurface"]
                 found = Found(mat, mat.name, mat.pass_index, node,
-                              tuple(v * factor * unit for v in r),
-                              sscol, node.subsurface_method, linked,
-                              tuple(b + (c - b) * factor
-                                    for b, c in zip(base, sscol)))
-                if linked:
-                    result.messages.append(
-                        f"{mat.name}: Subsurface is driven by a texture; "
-                        "its full radius is used")
+                              tuple(v * unit for v in sss.radius),
+                              sss.color, compat.method(node),
+                              switch in sss.linked, sss.albedo, sss.weight)
+                result.messages.extend(_principled_notes(mat, sss, switch))
             elif node.type == "SUBSURFACE_SCATTERING":
                 scale = node.inputs["Scale"].default_value
                 r = node.inputs["Radius"].default_value
                 found = Found(mat, mat.name, mat.pass_index, node,
                               tuple(v * scale * unit for v in r),
                               tuple(node.inputs["Color"].default_value[:3]),
-                              node.falloff)
+                              compat.method(node))
                 found.albedo = found.color
             if found:
                 result.found.append(found)

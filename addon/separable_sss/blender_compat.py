@@ -1,19 +1,291 @@
-"""Names that change between Blender versions, in one place, so a port to
-4.x (where the Principled BSDF's inputs were renamed: "Subsurface Weight",
-"Subsurface Scale", "Emission Color", "Transmission Weight", and the
-diffuse colour is no longer mixed with a Subsurface Color) edits only this
-file. These are Blender 3.4's."""
-PRINCIPLED = {
-    "base": "Base Color",
-    "subsurface": "Subsurface",          # factor; also scales the radius
-    "subsurface_radius": "Subsurface Radius",
-    "subsurface_color": "Subsurface Color",
-    "emission": "Emission",
-    "emission_strength": "Emission Strength",
-    "transmission": "Transmission",
-}
+"""Everything that differs between the supported Blenders (3.4, 4.5 LTS,
+5.0), in one place; the rest of the add-on, the scripts and the tests ask
+this module instead of checking versions. It imports nothing of the
+add-on's, so scripts and tests can import it on its own.
+
+- The Principled BSDF. Up to 3.x its diffuse colour is
+  mix(Base Color, Subsurface Color, Subsurface) and the radius is
+  Subsurface Radius x Subsurface. From 4.0 ("v2") Subsurface Weight mixes
+  diffuse and subsurface, the radius is Subsurface Radius x Subsurface
+  Scale and the scattering colour is Base Color; Blender converts old files
+  that way (Scale = old Subsurface, Weight 1, Base Color = the old mix).
+- Subsurface methods. 3.x's Random Walk (radius adapted to the colour) is
+  4.x's Random Walk (Skin); 3.x's Random Walk (Fixed Radius) is 4.x's
+  Random Walk. The add-on speaks 4.x's names (METHODS).
+- The compositor. Up to 4.x it is scene.node_tree with a Composite node;
+  in 5.0 it is a node group (scene.compositing_node_group) whose Group
+  Output is the composite.
+- Node group sockets: tree.inputs/outputs in 3.x, tree.interface from 4.0.
+- EEVEE's engine name: BLENDER_EEVEE_NEXT in 4.2 to 4.5.
+- Material.use_nodes and Scene.use_nodes are going away (5.0 warns).
+- Image formats: 5.0 chooses a multilayer EXR by media type
+  (MULTI_LAYER_IMAGE) before the file format.
+"""
+import os
+from dataclasses import dataclass
+
+import bpy
+
+VERSION = tuple(bpy.app.version)
+PRINCIPLED_V2 = VERSION >= (4, 0, 0)
+COMPOSITOR_IS_GROUP = VERSION >= (5, 0, 0)
+NODES_ALWAYS = VERSION >= (5, 0, 0)   # use_nodes is deprecated
+EXTENSIONS = VERSION >= (4, 2, 0)     # blender_manifest.toml, wheels
+EEVEE = "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= VERSION < (5, 0, 0) \
+    else "BLENDER_EEVEE"
+
+if PRINCIPLED_V2:
+    PRINCIPLED = {
+        "base": "Base Color",
+        "subsurface": "Subsurface Weight",   # the SSS switch
+        "subsurface_radius": "Subsurface Radius",
+        "subsurface_scale": "Subsurface Scale",
+        "subsurface_ior": "Subsurface IOR",
+        "subsurface_anisotropy": "Subsurface Anisotropy",
+        "emission": "Emission Color",
+        "emission_strength": "Emission Strength",
+        "transmission": "Transmission Weight",
+        "specular": "Specular IOR Level",
+        "roughness": "Roughness",
+    }
+    # Specular IOR Level 0 removes the specular layer, like Specular 0.
+    SPECULAR_OFF = 0.0
+else:
+    PRINCIPLED = {
+        "base": "Base Color",
+        "subsurface": "Subsurface",          # factor; also scales the radius
+        "subsurface_radius": "Subsurface Radius",
+        "subsurface_color": "Subsurface Color",
+        "emission": "Emission",
+        "emission_strength": "Emission Strength",
+        "transmission": "Transmission",
+        "specular": "Specular",
+        "roughness": "Roughness",
+    }
+    SPECULAR_OFF = 0.0
+
+# Blender's enum identifier for each method, by the names the add-on uses.
+METHODS = ("BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN")
+_METHOD_FROM_BLENDER = {} if PRINCIPLED_V2 else {
+    "RANDOM_WALK": "RANDOM_WALK_SKIN",
+    "RANDOM_WALK_FIXED_RADIUS": "RANDOM_WALK"}
+_METHOD_TO_BLENDER = {v: k for k, v in _METHOD_FROM_BLENDER.items()}
 
 
 def principled_input(node, key):
-    """The Principled BSDF's input socket for a version-independent key."""
-    return node.inputs[PRINCIPLED[key]]
+    """The Principled BSDF's input socket for a version-independent key.
+    By iteration: from 4.0, inputs[name] does not find a socket that the
+    current method leaves unused (Subsurface IOR outside Random Walk
+    (Skin)), though it is there and restored like the others."""
+    name = PRINCIPLED[key]
+    for sock in node.inputs:
+        if sock.name == name:
+            return sock
+    raise KeyError(f"{node.name} has no input {name!r}")
+
+
+def method(node):
+    """A Principled or Subsurface Scattering node's method, by 4.x's name."""
+    raw = node.subsurface_method if node.type == "BSDF_PRINCIPLED" \
+        else node.falloff
+    return _METHOD_FROM_BLENDER.get(raw, raw)
+
+
+def set_method(node, name):
+    raw = _METHOD_TO_BLENDER.get(name, name)
+    if node.type == "BSDF_PRINCIPLED":
+        node.subsurface_method = raw
+    else:
+        node.falloff = raw
+
+
+@dataclass
+class PrincipledSSS:
+    """What a Principled BSDF says about its subsurface scattering, read
+    from the sockets (a linked socket contributes its unlinked value)."""
+    weight: float          # how much of the diffuse lobe scatters (0..1)
+    radius: tuple          # scene units per channel
+    color: tuple           # the scattering colour
+    albedo: tuple          # the diffuse colour Cycles' random walk uses
+    linked: tuple          # names of the inputs driven by links
+    ior: float = 1.4
+    anisotropy: float = 0.0
+
+
+def _rgb(sock):
+    return tuple(float(v) for v in sock.default_value[:3])
+
+
+def principled_sss(node):
+    """The node's scattering as PrincipledSSS."""
+    base = principled_input(node, "base")
+    weight = principled_input(node, "subsurface")
+    radius = principled_input(node, "subsurface_radius")
+    if PRINCIPLED_V2:
+        scale = principled_input(node, "subsurface_scale")
+        socks = (weight, scale, radius, base)
+        w = 1.0 if weight.is_linked else float(weight.default_value)
+        r = tuple(float(v) * scale.default_value for v in
+                  radius.default_value)
+        return PrincipledSSS(
+            min(max(w, 0.0), 1.0), r, _rgb(base), _rgb(base),
+            tuple(s.name for s in socks if s.is_linked),
+            float(principled_input(node, "subsurface_ior").default_value),
+            float(principled_input(node, "subsurface_anisotropy")
+                  .default_value))
+    color = principled_input(node, "subsurface_color")
+    socks = (weight, radius, color, base)
+    f = 1.0 if weight.is_linked else float(weight.default_value)
+    b, c = _rgb(base), _rgb(color)
+    return PrincipledSSS(
+        1.0 if f > 0.0 else 0.0,
+        tuple(float(v) * f for v in radius.default_value), c,
+        tuple(x + (y - x) * f for x, y in zip(b, c)),
+        tuple(s.name for s in socks if s.is_linked))
+
+
+def set_principled(node, base=None, subsurface=0.0, radius=None,
+                   subsurface_color=None, **inputs):
+    """Sets a Principled BSDF from 3.x's terms (Base Color, Subsurface
+    factor, Subsurface Radius, Subsurface Color), converted for 4.x the way
+    Blender converts an old file, so that a scene built by script looks the
+    same on every version. Other inputs by key (roughness, specular)."""
+    if PRINCIPLED_V2:
+        if base is not None and subsurface_color is not None:
+            base = tuple(b + (c - b) * subsurface
+                         for b, c in zip(base, subsurface_color))
+        if base is not None:
+            principled_input(node, "base").default_value = base
+    else:
+        if base is not None:
+            principled_input(node, "base").default_value = base
+        if subsurface_color is not None:
+            principled_input(node, "subsurface_color").default_value = \
+                subsurface_color
+    set_subsurface_factor(node, subsurface)
+    if radius is not None:
+        principled_input(node, "subsurface_radius").default_value = radius
+    for key, value in inputs.items():
+        principled_input(node, key).default_value = value
+
+
+def radius_factor_input(node):
+    """The input that scales the radius: Subsurface in 3.x (also the
+    switch), Subsurface Scale from 4.0."""
+    return principled_input(node, "subsurface_scale" if PRINCIPLED_V2
+                            else "subsurface")
+
+
+def set_subsurface_factor(node, factor):
+    """3.x's Subsurface factor on any version: from 4.0 Scale = factor and
+    Weight = 1 (0 for factor 0), as Blender converts old files."""
+    radius_factor_input(node).default_value = factor
+    if PRINCIPLED_V2:
+        principled_input(node, "subsurface").default_value = \
+            1.0 if factor > 0.0 else 0.0
+
+
+# ------------------------------------------------------------ node trees
+
+def uses_nodes(idblock):
+    """Whether a material or world shades with its node tree."""
+    if NODES_ALWAYS:
+        return idblock.node_tree is not None
+    return bool(idblock.use_nodes) and idblock.node_tree is not None
+
+
+def ensure_nodes(idblock):
+    """Gives a material or world its node tree (the default one)."""
+    if not NODES_ALWAYS or idblock.node_tree is None:
+        idblock.use_nodes = True
+    return idblock.node_tree
+
+
+def new_group_socket(tree, in_out, socket_type, name):
+    """Adds a node group input ('INPUT') or output ('OUTPUT')."""
+    if hasattr(tree, "interface"):
+        return tree.interface.new_socket(name, in_out=in_out,
+                                         socket_type=socket_type)
+    sockets = tree.inputs if in_out == 'INPUT' else tree.outputs
+    return sockets.new(socket_type, name)
+
+
+def new_mix_rgb(tree):
+    """A colour Mix node with inputs Fac, Color1, Color2 and output Color
+    (the legacy MixRGB node, which every supported version still runs)."""
+    return tree.nodes.new("ShaderNodeMixRGB")
+
+
+# ---------------------------------------------------------- image output
+
+_IMAGE_SETTINGS = ("media_type", "file_format", "color_depth", "exr_codec")
+
+
+def image_settings_state(settings):
+    """The output format settings, for restore_image_settings()."""
+    return tuple((name, getattr(settings, name)) for name in
+                 _IMAGE_SETTINGS if hasattr(settings, name))
+
+
+def restore_image_settings(settings, state):
+    for name, value in state:      # media type first: it limits the rest
+        setattr(settings, name, value)
+
+
+def set_multilayer_exr(settings, depth="32", codec="ZIP"):
+    """Multilayer OpenEXR, every view layer and pass in one file."""
+    if hasattr(settings, "media_type"):
+        settings.media_type = "MULTI_LAYER_IMAGE"
+    settings.file_format = "OPEN_EXR_MULTILAYER"
+    settings.color_depth = depth
+    settings.exr_codec = codec
+
+
+# ------------------------------------------------------------ compositor
+
+def compositor_tree(scene, create=False):
+    """The scene's compositor node tree, or None; with create, one is made
+    (in 5.0 the group Blender's own "New" makes: Render Layers into the
+    Group Output) and compositing is switched on."""
+    if COMPOSITOR_IS_GROUP:
+        tree = scene.compositing_node_group
+        if tree is None and create:
+            tree = bpy.data.node_groups.new("Compositing",
+                                            "CompositorNodeTree")
+            new_group_socket(tree, 'OUTPUT', "NodeSocketColor", "Image")
+            layers = tree.nodes.new("CompositorNodeRLayers")
+            layers.location = (-300.0, 0.0)
+            out = tree.nodes.new("NodeGroupOutput")
+            out.location = (200.0, 0.0)
+            tree.links.new(layers.outputs["Image"], out.inputs[0])
+            scene.compositing_node_group = tree
+        if tree is not None and create:
+            scene.render.use_compositing = True
+        return tree
+    if create:
+        scene.use_nodes = True
+    return scene.node_tree if scene.use_nodes or create else None
+
+
+def composite_input(tree, create=True, location=(0.0, 0.0)):
+    """The socket whose image is the composite: the Composite node's Image
+    input (made if missing and create), or in 5.0 the group output's
+    first input."""
+    kind = "NodeGroupOutput" if COMPOSITOR_IS_GROUP else \
+        "CompositorNodeComposite"
+    node = next((n for n in tree.nodes if n.bl_idname == kind), None)
+    if node is None:
+        if not create:
+            return None
+        node = tree.nodes.new(kind)
+        node.location = location
+        if COMPOSITOR_IS_GROUP and not tree.interface.items_tree:
+            new_group_socket(tree, 'OUTPUT', "NodeSocketColor", "Image")
+    return node.inputs[0]
+
+
+def blender_command():
+    """The program that runs this Blender again with Blender's command
+    line: its binary, or for the bpy module the `blender` command line
+    beside its interpreter that started this process (SSS_BLENDER)."""
+    return bpy.app.binary_path or os.environ.get("SSS_BLENDER") or None

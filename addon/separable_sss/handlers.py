@@ -8,6 +8,7 @@ import os
 import bpy
 from bpy.app.handlers import persistent
 
+from . import blender_compat as compat
 from . import pipeline
 from .analysis import analyse
 from .switch_off import switched_off
@@ -42,10 +43,8 @@ def on_init(scene, *_):
     block = switched_off(scene, analysis, backlight=False)
     block.__enter__()
     settings = scene.render.image_settings
-    saved = (settings.file_format, settings.color_depth, settings.exr_codec)
-    settings.file_format = "OPEN_EXR_MULTILAYER"
-    settings.color_depth = "32"
-    settings.exr_codec = "ZIP"
+    saved = compat.image_settings_state(settings)
+    compat.set_multilayer_exr(settings)
     pipeline.write_description(scene, analysis, desc)
     _active[scene.name] = (block, saved, desc)
 
@@ -74,7 +73,7 @@ def on_end(scene, *_):
         return
     block, saved, _ = state
     settings = scene.render.image_settings
-    (settings.file_format, settings.color_depth, settings.exr_codec) = saved
+    compat.restore_image_settings(settings, saved)
     block.__exit__(None, None, None)
 
 

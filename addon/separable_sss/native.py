@@ -2,6 +2,7 @@
 signature it uses, checks the ABI and struct sizes, and turns status codes
 into exceptions with the library's own messages."""
 import ctypes
+import importlib.util
 import os
 import threading
 
@@ -44,12 +45,16 @@ class Timings(ctypes.Structure):
 
 
 def candidates():
-    """Where the library may be: $SSS_LIB, beside this file (the installed
-    zip), or the checkout's build folder (running from the repository)."""
+    """Where the library may be: $SSS_LIB, beside this file (the legacy
+    zip), in the wheel the extension installs (package libsss_native), or
+    the checkout's build folder (running from the repository)."""
     env = os.environ.get("SSS_LIB")
     if env:
         yield env
     yield os.path.join(_HERE, "libsss.so")
+    spec = importlib.util.find_spec("libsss_native")
+    if spec is not None and spec.origin:
+        yield os.path.join(os.path.dirname(spec.origin), "libsss.so")
     yield os.path.normpath(os.path.join(_HERE, "..", "..", "build",
                                         "libsss.so"))
 

@@ -4,6 +4,8 @@ Composite and Viewer outputs. Building it twice reuses the same nodes; user
 nodes are never deleted."""
 import bpy
 
+from . import blender_compat as compat
+
 RESULT_NAME = "SSS Result"
 GROUP_NAME = "SSS Composite"       # both the group node and its node tree
 VIEWER_NAME = "SSS Viewer"
@@ -51,16 +53,6 @@ def _link(tree, from_socket, to_socket):
     return tree.links.new(from_socket, to_socket)
 
 
-def _group_socket(tree, in_out, socket_type, name):
-    """Add a group input or output; Blender 3.x API, with 4.x's interface
-    as a fallback."""
-    if hasattr(tree, "interface"):
-        return tree.interface.new_socket(name, in_out=in_out,
-                                         socket_type=socket_type)
-    sockets = tree.inputs if in_out == 'INPUT' else tree.outputs
-    return sockets.new(socket_type, name)
-
-
 def _ensure_group_tree():
     """The "SSS Composite" node tree: Image -> Exposure -> Image. An existing
     tree of that name is reused as is, so artists' edits survive."""
@@ -68,12 +60,12 @@ def _ensure_group_tree():
     if tree is not None and tree.bl_idname == "CompositorNodeTree":
         return tree
     tree = bpy.data.node_groups.new(GROUP_NAME, "CompositorNodeTree")
-    _group_socket(tree, 'INPUT', "NodeSocketColor", "Image")
-    exposure = _group_socket(tree, 'INPUT', "NodeSocketFloat", "Exposure")
+    compat.new_group_socket(tree, 'INPUT', "NodeSocketColor", "Image")
+    exposure = compat.new_group_socket(tree, 'INPUT', "NodeSocketFloat", "Exposure")
     exposure.default_value = 0.0
     exposure.min_value = -10.0
     exposure.max_value = 10.0
-    _group_socket(tree, 'OUTPUT', "NodeSocketColor", "Image")
+    compat.new_group_socket(tree, 'OUTPUT', "NodeSocketColor", "Image")
 
     group_in = tree.nodes.new("NodeGroupInput")
     group_in.location = (-300.0, 0.0)
@@ -122,8 +114,7 @@ def _sss_error(message):
 def ensure_setup(scene, image):
     """Build or update the SSS result set-up in `scene`'s compositor and
     return its Image node. Calling it again reuses the same nodes."""
-    scene.use_nodes = True
-    tree = scene.node_tree
+    tree = compat.compositor_tree(scene, create=True)
     if tree is None:
         raise _sss_error("The scene has no compositor node tree")
 
@@ -160,10 +151,7 @@ def ensure_setup(scene, image):
         group.node_tree = _ensure_group_tree()
     group.width = max(group.width, 160.0)
 
-    composite = _first(tree, "CompositorNodeComposite")
-    if composite is None:
-        composite = _new(tree, "composite", "Composite",
-                         "CompositorNodeComposite", (base_x + 600.0, y))
+    composite = compat.composite_input(tree, location=(base_x + 600.0, y))
     viewer = _find(tree, "viewer", VIEWER_NAME, "CompositorNodeViewer")
     if viewer is None:
         viewer = _new(tree, "viewer", VIEWER_NAME, "CompositorNodeViewer",
@@ -171,14 +159,14 @@ def ensure_setup(scene, image):
         tree.nodes.active = viewer          # the backdrop shows this one
 
     _link(tree, source, group.inputs[0])
-    _link(tree, group.outputs[0], composite.inputs["Image"])
+    _link(tree, group.outputs[0], composite)
     _link(tree, group.outputs[0], viewer.inputs["Image"])
     return result
 
 
 def find_result(scene):
     """The SSS Image node of `scene`, or None."""
-    tree = scene.node_tree if scene.use_nodes else None
+    tree = compat.compositor_tree(scene)
     if tree is None:
         return None
     for node in tree.nodes:
@@ -192,7 +180,7 @@ def remove_setup(scene):
     artist's grading, nor the image). Where the Composite is left without an
     input, the Render Layers image goes back into it. Returns the number of
     nodes removed."""
-    tree = scene.node_tree
+    tree = compat.compositor_tree(scene)
     if tree is None:
         return 0
     ours = [node for node in tree.nodes
@@ -200,10 +188,9 @@ def remove_setup(scene):
     for node in ours:
         tree.nodes.remove(node)
 
-    composite = _first(tree, "CompositorNodeComposite")
+    composite = compat.composite_input(tree, create=False)
     render_layers = _first(tree, "CompositorNodeRLayers")
     if (ours and composite is not None and render_layers is not None
-            and not composite.inputs["Image"].is_linked):
-        tree.links.new(render_layers.outputs["Image"],
-                       composite.inputs["Image"])
+            and not composite.is_linked):
+        tree.links.new(render_layers.outputs["Image"], composite)
     return len(ours)

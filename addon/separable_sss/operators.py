@@ -247,8 +247,7 @@ class SSS_OT_remove_setup(bpy.types.Operator):
     @classmethod
     def poll(cls, context):
         scene = context.scene
-        if scene is None or scene.node_tree is None or \
-                nodes.find_result(scene) is None:
+        if scene is None or nodes.find_result(scene) is None:
             cls.poll_message_set("There are no SSS nodes in the compositor")
             return False
         return True

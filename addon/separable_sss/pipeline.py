@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import bpy
 
 from . import analysis, native, transmission
+from . import blender_compat as compat
 from .analysis import Analysis, Found, analyse  # noqa: F401
 from .switch_off import switched_off
 
@@ -64,8 +65,10 @@ def paths_for(scene, frame):
 
 def _material_entry(found):
     s = found.material.sss
+    # Principled v2's Subsurface Weight mixes the diffuse and subsurface
+    # lobes: it scales how much of the light is scattered.
     entry = {"pass_index": found.pass_index, "name": found.name,
-             "strength": s.strength,
+             "strength": s.strength * found.weight,
              "texturing": "post" if s.texturing == "POST" else
              "pre-and-post"}
     if s.taps:
@@ -74,9 +77,11 @@ def _material_entry(found):
     if s.profile in ("BLENDER", "BURLEY"):
         mapping = s.mapping
         # Measured (blender_scripts/calibrate.py, csrc/sss_calibration.c):
-        # Cycles' random walk widens like cycles-random-walk, and returns
-        # the diffuse lobe's energy times g(albedo).
-        walk = s.profile == "BURLEY" or found.method == "RANDOM_WALK"
+        # Cycles' random walk with the radius adapted to the colour (3.x's
+        # Random Walk, 4.x's Random Walk (Skin)) widens like
+        # cycles-random-walk, and returns the diffuse lobe's energy times
+        # g(albedo).
+        walk = s.profile == "BURLEY" or found.method == "RANDOM_WALK_SKIN"
         if mapping == "AUTO":
             mapping = "CYCLES_RANDOM_WALK" if walk else \
                 "RANDOM_WALK" if found.method.startswith("RANDOM_WALK") \
@@ -157,15 +162,12 @@ def save_passes(scene, path):
     if result is None:
         raise SSSError("there is no render result yet: render first")
     settings = scene.render.image_settings
-    saved = (settings.file_format, settings.color_depth, settings.exr_codec)
+    saved = compat.image_settings_state(settings)
     try:
-        settings.file_format = "OPEN_EXR_MULTILAYER"
-        settings.color_depth = "32"
-        settings.exr_codec = "ZIP"
+        compat.set_multilayer_exr(settings)
         result.save_render(path, scene=scene)
     finally:
-        (settings.file_format, settings.color_depth,
-         settings.exr_codec) = saved
+        compat.restore_image_settings(settings, saved)
     if not os.path.exists(path):
         raise SSSError(f"Blender did not write {path} (no render result "
                        "yet?)")

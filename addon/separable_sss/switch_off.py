@@ -5,7 +5,9 @@ render.
 In Blender 3.x the Principled BSDF's diffuse colour is
 mix(Base Color, Subsurface Color, Subsurface): for the render, Base Color
 becomes that mix (a Mix node when any of the three is linked to a texture;
-nothing is baked) and Subsurface becomes 0. A Subsurface Scattering node is
+nothing is baked) and Subsurface becomes 0. From 4.0 the diffuse colour is
+Base Color: Subsurface Weight becomes 0 (unlinked if a texture drives it),
+which is the render Cycles gives with Weight 0. A Subsurface Scattering node is
 replaced by a Diffuse BSDF of the same colour and normal. The passes the
 library reads are enabled on every view layer, and scattering materials
 without a pass index get a free one."""
@@ -13,6 +15,7 @@ from contextlib import contextmanager
 
 import bpy
 
+from . import blender_compat as compat
 from .blender_compat import principled_input
 
 PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
@@ -73,7 +76,9 @@ def _unlink(tree, undo, sock):
 
 
 def _new_node(tree, undo, kind, location):
-    node = tree.nodes.new(kind)
+    """A node of type kind (an idname, or a function of the tree that
+    makes one) that the undo step removes."""
+    node = kind(tree) if callable(kind) else tree.nodes.new(kind)
     node.label = TAG
     node.location = location
     undo.add(lambda: tree.nodes.remove(node))
@@ -81,9 +86,13 @@ def _new_node(tree, undo, kind, location):
 
 
 def _switch_principled(tree, node, undo):
+    factor = principled_input(node, "subsurface")
+    if compat.PRINCIPLED_V2:
+        _unlink(tree, undo, factor)
+        undo.set(factor, "default_value", 0.0)
+        return
     base = principled_input(node, "base")
     sscol = principled_input(node, "subsurface_color")
-    factor = principled_input(node, "subsurface")
     if not (base.is_linked or sscol.is_linked or factor.is_linked):
         t = factor.default_value
         mixed = tuple(b + (s - b) * t for b, s in
@@ -91,7 +100,7 @@ def _switch_principled(tree, node, undo):
         undo.set(base, "default_value", mixed)
         undo.set(factor, "default_value", 0.0)
         return
-    mix = _new_node(tree, undo, "ShaderNodeMixRGB",
+    mix = _new_node(tree, undo, compat.new_mix_rgb,
                     (node.location.x - 220, node.location.y))
     mix.blend_type = "MIX"
     for src, dst in ((factor, mix.inputs["Fac"]),

@@ -28,6 +28,8 @@ import math
 import bpy
 from mathutils import Vector
 
+from . import blender_compat as compat
+
 LAYER = "SSSBackLight"             # SSS_BACKLIGHT_LAYER in csrc/sss.h
 THICKNESS_AOV = "SSSThicknessSq"   # SSS_THICKNESS_SQ_PASS
 FACING_AOV = "SSSFacing"           # SSS_FACING_PASS
@@ -72,8 +74,8 @@ def model(found):
         return "OFF"
     if s.transmission != "AUTO":
         return s.transmission
-    walk = found.method == "RANDOM_WALK" and s.profile in ("BLENDER",
-                                                           "BURLEY")
+    walk = found.method.startswith("RANDOM_WALK") and \
+        s.profile in ("BLENDER", "BURLEY")
     return "BURLEY" if walk else "OFF"
 
 
@@ -99,7 +101,7 @@ def _world_is_bright(scene):
     world = scene.world
     if world is None:
         return False
-    if not world.use_nodes or world.node_tree is None:
+    if not compat.uses_nodes(world):
         c = world.color
         return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] >= \
             WORLD_THRESHOLD
@@ -349,8 +351,7 @@ def _override_material(distance, undo, need_ao=True):
     (without, the AOV is 0 and the layer costs far less)."""
     mat = bpy.data.materials.new(MATERIAL)
     undo.add(lambda: bpy.data.materials.remove(mat))
-    mat.use_nodes = True
-    tree = mat.node_tree
+    tree = compat.ensure_nodes(mat)
     for node in list(tree.nodes):
         tree.nodes.remove(node)
     out = tree.nodes.new("ShaderNodeOutputMaterial")
@@ -385,11 +386,11 @@ def _override_material(distance, undo, need_ao=True):
     # slab = (mode > 1.5) x backfacing: leaving the object's medium
     slab = _math(tree, "MULTIPLY", _math(tree, "GREATER_THAN", mode, 1.5),
                  geo.outputs["Backfacing"])
-    pick = tree.nodes.new("ShaderNodeMixRGB")
+    pick = compat.new_mix_rgb(tree)
     pick.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
     tree.links.new(slab, pick.inputs["Fac"])
     tree.links.new(comb.outputs[0], pick.inputs["Color2"])
-    lit = tree.nodes.new("ShaderNodeMixRGB")
+    lit = compat.new_mix_rgb(tree)
     lit.inputs["Color1"].default_value = (0.0, 0.0, 0.0, 1.0)
     on = _math(tree, "GREATER_THAN", mode, 0.5)
     if LAYER_MAX_DEPTH >= 0:

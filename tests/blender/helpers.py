@@ -8,6 +8,13 @@ import bpy
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 BUILD = os.environ.get("SSS_BUILD", os.path.join(ROOT, "build"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))  # exr helpers
+# The version differences, without importing (registering) the add-on.
+sys.path.insert(0, os.path.join(ROOT, "addon", "separable_sss"))
+import blender_compat as compat  # noqa: E402
+
+# The Blender running these tests, for the ones that start another: a
+# `blender` binary, or the bpy module's command line.
+BLENDER = compat.blender_command()
 
 
 def load_addon():
@@ -24,7 +31,7 @@ def build_blend(kind, path, size=96, samples=8):
     """A scene from blender_scripts/build_scene.py, in its own process so
     this one's data is untouched."""
     proc = subprocess.run(
-        [bpy.app.binary_path, "-b", "--factory-startup",
+        [BLENDER, "-b", "--factory-startup",
          "--python-exit-code", "1", "--python",
          os.path.join(ROOT, "blender_scripts", "build_scene.py"), "--",
          "--kind", kind, "--out", path, "--size", str(size), "--samples",
@@ -47,7 +54,8 @@ def snapshot(scene):
     """Everything the add-on may touch, as plain comparable data."""
     data = {}
     for mat in bpy.data.materials:
-        entry = {"pass_index": mat.pass_index, "use_nodes": mat.use_nodes}
+        entry = {"pass_index": mat.pass_index,
+                 "use_nodes": compat.uses_nodes(mat)}
         if mat.node_tree:
             tree = mat.node_tree
             entry["nodes"] = {
@@ -66,13 +74,14 @@ def snapshot(scene):
             a: getattr(layer, a) for a in dir(layer)
             if a.startswith("use_pass_")}
     s = scene.render.image_settings
-    data["image_settings"] = (s.file_format, s.color_depth, s.exr_codec)
+    data["image_settings"] = compat.image_settings_state(s)
     r = scene.render
     data["render"] = (r.engine, r.resolution_x, r.resolution_y,
                       r.resolution_percentage, r.filepath,
                       r.film_transparent, scene.cycles.samples)
-    data["node_tree"] = None if not scene.node_tree else sorted(
-        (n.name, n.bl_idname) for n in scene.node_tree.nodes)
+    tree = compat.compositor_tree(scene)
+    data["node_tree"] = None if tree is None else sorted(
+        (n.name, n.bl_idname) for n in tree.nodes)
     return data
 
 

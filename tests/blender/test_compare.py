@@ -7,7 +7,7 @@ import subprocess
 import bpy
 import pytest
 
-from helpers import BUILD, ROOT, build_blend
+from helpers import BLENDER, BUILD, ROOT, build_blend
 
 SCENE = "mixed"  # two profiles and an occluder: the broadest of the three
 
@@ -22,7 +22,7 @@ def test_compare_quick(tmp_path):
     out = tmp_path / "compare"
     env = dict(os.environ, SSS_LIB=os.path.join(BUILD, "libsss.so"))
     proc = subprocess.run(
-        [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code",
+        [BLENDER, "-b", "--factory-startup", "--python-exit-code",
          "1", "--python", os.path.join(ROOT, "blender_scripts", "compare.py"),
          "--", "--scene", blend, "--out", str(out), "--quick"],
         capture_output=True, text=True, timeout=400, env=env)
@@ -90,11 +90,11 @@ def test_sweep_radius(tmp_path):
     out = tmp_path / "sweep"
     env = dict(os.environ, SSS_LIB=os.path.join(BUILD, "libsss.so"))
     proc = subprocess.run(
-        [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code",
+        [BLENDER, "-b", "--factory-startup", "--python-exit-code",
          "1", "--python", os.path.join(ROOT, "blender_scripts",
                                        "sweep_radius.py"),
          "--", "--scene", blend, "--out", str(out), "--scales", "0.5,4",
-         "--resolution", "64x48", "--ref-samples", "32", "--samples", "8"],
+         "--resolution", "64x48", "--ref-samples", "256", "--samples", "8"],
         capture_output=True, text=True, timeout=300, env=env)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     rows = _rows(out / "sweep.csv")
@@ -111,7 +111,7 @@ def test_sweep_radius(tmp_path):
 
     # Bad input is refused with the option's name.
     proc = subprocess.run(
-        [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code",
+        [BLENDER, "-b", "--factory-startup", "--python-exit-code",
          "1", "--python", os.path.join(ROOT, "blender_scripts",
                                        "sweep_radius.py"),
          "--", "--scene", blend, "--out", str(out), "--scales", "0,1"],

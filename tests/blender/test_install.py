@@ -8,7 +8,7 @@ import bpy
 import numpy as np
 import pytest
 
-from helpers import build_blend, diff, snapshot
+from helpers import BLENDER, build_blend, compat, diff, snapshot
 from exr import pass_rgb, read_channels
 
 ZIP = os.environ.get("SSS_ADDON_ZIP")
@@ -49,7 +49,7 @@ def result_wiring(scene):
                 if link.to_node.name not in reached:
                     reached.add(link.to_node.name)
                     todo.append(link.to_node)
-    return node, {scene.node_tree.nodes[n].type for n in reached}
+    return node, {compat.compositor_tree(scene).nodes[n].type for n in reached}
 
 
 def test_render_operator(blends, tmp_path):
@@ -73,9 +73,9 @@ def test_render_operator(blends, tmp_path):
     assert changed.any()
     assert np.all(index[changed] > 0), "a plain pixel changed"
     # Running it again reuses the set-up instead of adding nodes.
-    count = len(scene.node_tree.nodes)
+    count = len(compat.compositor_tree(scene).nodes)
     assert bpy.ops.sss.apply() == {"FINISHED"}
-    assert len(scene.node_tree.nodes) == count
+    assert len(compat.compositor_tree(scene).nodes) == count
 
 
 def test_nothing_scatters(blends, tmp_path):
@@ -119,7 +119,7 @@ def test_animation_render_with_handler(blends, tmp_path):
     bpy.ops.wm.save_as_mainfile(filepath=path)
     before = open(path, "rb").read()
     proc = subprocess.run(
-        [bpy.app.binary_path, "-b", path, "--python-expr",
+        [BLENDER, "-b", path, "--python-expr",
          "import addon_utils; addon_utils.enable('separable_sss')", "-a"],
         capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]

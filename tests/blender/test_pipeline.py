@@ -6,7 +6,8 @@ import bpy
 import numpy as np
 import pytest
 
-from helpers import BUILD, ROOT, build_blend, diff, load_addon, snapshot
+from helpers import (BLENDER, BUILD, ROOT, build_blend, compat, diff,
+                     load_addon, snapshot)
 
 separable_sss = load_addon()
 from separable_sss import pipeline  # noqa: E402
@@ -142,16 +143,43 @@ def test_two_materials_keep_their_profiles(blends, tmp_path):
 
 def test_switched_off_render_keeps_the_look(blends, tmp_path):
     """Rendering with SSS off changes only how light spreads, not the
-    material's colour: DiffCol there is mix(base, subsurface colour)."""
+    material's colour: the passes are those Cycles gives for the material
+    without SSS, made by hand the way Blender defines it (3.x: Base Color
+    becomes mix(Base Color, Subsurface Color, Subsurface) and Subsurface 0;
+    from 4.0: Subsurface Weight 0)."""
     scene = open_scene(blends["two"], tmp_path)
     job = render(scene)
     ch, _ = read_channels(job.input_exr)
-    index = ch["ViewLayer.IndexMA.X"]
     desc = json.load(open(job.scene_json))
     skin = [m for m in desc["materials"] if m["name"] == "Skin"][0]
-    col = pass_rgb(ch, "ViewLayer.DiffCol")[index == skin["pass_index"]]
-    base, sub, t = np.array([0.8, 0.6, 0.5]), np.array([0.9, 0.5, 0.4]), 0.5
-    assert np.allclose(np.median(col, 0), base + (sub - base) * t, atol=2e-3)
+    mask = ch["ViewLayer.IndexMA.X"] == skin["pass_index"]
+    assert mask.mean() > 0.02
+
+    node = bpy.data.materials["Skin"].node_tree.nodes["Principled BSDF"]
+    weight = compat.principled_input(node, "subsurface")
+    if not compat.PRINCIPLED_V2:
+        base = compat.principled_input(node, "base")
+        sub = compat.principled_input(node, "subsurface_color")
+        t = weight.default_value
+        base.default_value = [b + (c - b) * t for b, c in
+                              zip(base.default_value, sub.default_value)]
+    weight.default_value = 0.0
+    for name in ("diffuse_direct", "diffuse_indirect", "diffuse_color"):
+        setattr(scene.view_layers[0], "use_pass_" + name, True)
+    bpy.ops.render.render()
+    plain = str(tmp_path / "by_hand.exr")
+    pipeline.save_passes(scene, plain)
+    want, _ = read_channels(plain)
+    for name in ("DiffCol", "Combined"):
+        got = pass_rgb(ch, "ViewLayer." + name)[mask]
+        ref = pass_rgb(want, "ViewLayer." + name)[mask]
+        assert np.allclose(np.median(got, 0), np.median(ref, 0),
+                           atol=2e-3), name
+    if not compat.PRINCIPLED_V2:   # and the formula itself, as in 3.x
+        col = pass_rgb(ch, "ViewLayer.DiffCol")[mask]
+        base, sub = np.array([0.8, 0.6, 0.5]), np.array([0.9, 0.5, 0.4])
+        assert np.allclose(np.median(col, 0), base + (sub - base) * 0.5,
+                           atol=2e-3)
 
 
 def test_no_scattering_material(blends, tmp_path):
@@ -164,7 +192,7 @@ def test_render_sss_script(blends, tmp_path):
     mtime = os.path.getmtime(blends["two"])
     out = tmp_path / "shot_####.exr"
     proc = subprocess.run(
-        [bpy.app.binary_path, "-b", blends["two"], "--python-exit-code", "1",
+        [BLENDER, "-b", blends["two"], "--python-exit-code", "1",
          "--python", os.path.join(ROOT, "blender_scripts", "render_sss.py"),
          "--", "--output", str(out), "--frames", "1-2", "--samples", "2",
          "--resolution", "48x40"], capture_output=True, text=True,
