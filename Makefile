@@ -128,7 +128,7 @@ $(BUILD)/separable_sss.zip: $(ADDON_FILES) $(BUILD)/libsss.so scripts/build_addo
 # build folder with a `blender` command line (scripts/bpy_blender.py):
 # BLENDER=$(BUILD)/bpy-4.5.15/bin/blender runs demo or compare on 4.5.
 BLENDER ?= blender
-BPY_VERSIONS ?= 4.5.15
+BPY_VERSIONS ?= 4.5.15 5.0.1
 BPY_BLENDERS := $(patsubst %,$(BUILD)/bpy-%/bin/blender,$(BPY_VERSIONS))
 BLENDERS ?= $(BLENDER) $(BPY_BLENDERS)
 bpy: $(BPY_BLENDERS)

@@ -4,16 +4,52 @@ read and write besides the library itself."""
 import numpy as np
 
 
-def read_exr(path):
+# Blender 5.0 names render passes in full where 3.x and 4.x wrote short
+# names; channels are read under the short ones, so one name serves every
+# version (the library reads both: csrc/sss_exr.c).
+SHORT_PASS_NAMES = {
+    "Diffuse Direct": "DiffDir", "Diffuse Indirect": "DiffInd",
+    "Diffuse Color": "DiffCol", "Glossy Direct": "GlossDir",
+    "Glossy Indirect": "GlossInd", "Glossy Color": "GlossCol",
+    "Transmission Direct": "TransDir", "Transmission Indirect": "TransInd",
+    "Transmission Color": "TransCol", "Emission": "Emit",
+    "Environment": "Env", "Material Index": "IndexMA",
+}
+
+
+def short_name(channel):
+    """ "ViewLayer.Diffuse Direct.R" -> "ViewLayer.DiffDir.R"; other
+    names unchanged."""
+    parts = channel.split(".")
+    if len(parts) >= 2 and parts[-2] in SHORT_PASS_NAMES:
+        parts[-2] = SHORT_PASS_NAMES[parts[-2]]
+    return ".".join(parts)
+
+
+def read_exr_parts(path):
+    """{channel name: float32 (h, w) array} over every part (Blender 5.0
+    saves a multilayer EXR as one part per pass), short pass names; and
+    the first part's ImageSpec."""
     import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(path)
+    inp = oiio.ImageInput.open(str(path))
     if not inp:
         raise RuntimeError(f"cannot read {path}: {oiio.geterror()}")
-    spec = inp.spec()
-    px = inp.read_image(oiio.FLOAT)
+    first, out, part = inp.spec(), {}, 0
+    while inp.seek_subimage(part, 0):
+        spec = inp.spec()
+        px = inp.read_image(part, 0, 0, spec.nchannels, oiio.FLOAT)
+        if px is None:
+            raise RuntimeError(f"cannot read {path}: {inp.geterror()}")
+        px = np.asarray(px).reshape(spec.height, spec.width, spec.nchannels)
+        for i, name in enumerate(spec.channelnames):
+            out[short_name(name)] = np.array(px[:, :, i])
+        part += 1
     inp.close()
-    return {n: np.array(px[:, :, i]) for i, n in
-            enumerate(spec.channelnames)}
+    return out, first
+
+
+def read_exr(path):
+    return read_exr_parts(path)[0]
 
 
 def write_exr(path, channels):

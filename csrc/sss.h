@@ -425,10 +425,14 @@ typedef struct sss_exr_options {
 
 SSS_API void sss_exr_options_default(sss_exr_options *opt);
 
-/* Reads the first part of a scanline or tiled EXR (level 0), half, float
- * or uint channels (converted to float), any compression OpenEXR 3.1's C
- * API decodes (all but DWAA/DWAB: SSS_ERR_UNSUPPORTED). Errors name the
- * file and what is wrong (missing, truncated, corrupt, too large, deep). */
+/* Reads a scanline or tiled EXR (level 0), half, float or uint channels
+ * (converted to float), any compression OpenEXR 3.1's C API decodes (all
+ * but DWAA/DWAB: SSS_ERR_UNSUPPORTED). Every part of a multi-part file is
+ * read (Blender 5.0 saves a part per pass); the parts must share one data
+ * window, and a channel not named under its part's name is put under it.
+ * Writing makes one part of it all, part 0's metadata kept. Errors name
+ * the file and what is wrong (missing, truncated, corrupt, too large,
+ * deep, parts of different sizes). */
 SSS_API sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
                                 sss_exr **out, char *errbuf,
                                 size_t errbuf_len);

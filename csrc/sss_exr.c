@@ -29,7 +29,8 @@ typedef struct xchan {
 	const char *comp; /* the component: name after its last dot */
 	int32_t type;     /* exr_pixel_type_t on disk, restored on writing */
 	uint8_t p_linear; /* perceptual hint, kept for lossy codecs */
-	int32_t index;    /* position in the source channel list; -1: added */
+	int32_t index;    /* position among the source's channels, counted
+	                   * over its parts in order; -1: added */
 } xchan;
 
 typedef struct xpass {
@@ -61,6 +62,7 @@ struct sss_exr {
 	ino_t ino;              /* written over */
 	int32_t pass_count, pass_cap;
 	xpass *passes;
+	int part_count;         /* parts read: all share one data window */
 	exr_context_t header;   /* the source header, kept for its metadata */
 	xio io;                 /* header's callbacks' state (quiet by now) */
 };
@@ -414,66 +416,108 @@ static void split_name(const char *name, const char **layer, size_t *layer_len,
 	}
 }
 
-/* Groups the source's channels into passes (in channel-list order),
- * components sorted canonically. Pixel buffers are allocated later. */
-static sss_result group_channels(sss_exr *exr, const exr_attr_chlist_t *cl,
-                                 char *errbuf, size_t errbuf_len)
+/* A channel's name as the library names it: in a multi-part file (Blender
+ * 5.0 writes one part per pass, named "ViewLayer.Combined"), a channel
+ * not already under its part's name is put under it ("R" in part
+ * "ViewLayer.Combined" is "ViewLayer.Combined.R"), so that names stay
+ * unique across parts. Malloc'ed; NULL when out of memory. */
+static char *qualified_name(const sss_exr *exr, int part, const char *name)
 {
-	for (int i = 0; i < cl->num_channels; i++) {
-		const exr_attr_chlist_entry_t *e = &cl->entries[i];
-		const char *name = e->name.str;
-		if (e->x_sampling != 1 || e->y_sampling != 1)
-			return FAILX(SSS_ERR_UNSUPPORTED, "%s: channel '%s' is "
-			             "subsampled (%dx%d); only full-resolution channels "
-			             "are supported", exr->path, name, e->x_sampling,
-			             e->y_sampling);
-		if (e->pixel_type != EXR_PIXEL_UINT &&
-		    e->pixel_type != EXR_PIXEL_HALF &&
-		    e->pixel_type != EXR_PIXEL_FLOAT)
-			return FAILX(SSS_ERR_EXR, "%s: channel '%s' has unknown pixel "
-			             "type %d", exr->path, name, (int)e->pixel_type);
-		const char *layer, *pass, *comp;
-		size_t layer_len, pass_len;
-		split_name(name, &layer, &layer_len, &pass, &pass_len, &comp);
+	const char *part_name = NULL;
+	if (exr->part_count < 2 ||
+	    exr_get_name(exr->header, part, &part_name) != EXR_ERR_SUCCESS ||
+	    !part_name || !part_name[0])
+		return dup_n(name, strlen(name));
+	size_t n = strlen(part_name), len = strlen(name);
+	if (len > n && memcmp(name, part_name, n) == 0 && name[n] == '.')
+		return dup_n(name, len);
+	char *q = malloc(n + 1 + len + 1);
+	if (q)
+		snprintf(q, n + 1 + len + 1, "%s.%s", part_name, name);
+	return q;
+}
 
-		xpass *p = NULL;
-		for (int32_t j = 0; j < exr->pass_count && !p; j++) {
-			xpass *q = &exr->passes[j];
-			if (strlen(q->layer) == layer_len &&
-			    memcmp(q->layer, layer, layer_len) == 0 &&
-			    strlen(q->pass) == pass_len &&
-			    memcmp(q->pass, pass, pass_len) == 0)
-				p = q;
-		}
-		if (!p && !(p = append_pass(exr, layer, layer_len, pass, pass_len)))
-			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory",
-			             exr->path);
+/* Source channel `index` (entry e of part `part`) into its pass. */
+static sss_result add_channel(sss_exr *exr, const exr_attr_chlist_entry_t *e,
+                              int part, int32_t index, char *errbuf,
+                              size_t errbuf_len)
+{
+	const char *source = e->name.str;
+	if (e->x_sampling != 1 || e->y_sampling != 1)
+		return FAILX(SSS_ERR_UNSUPPORTED, "%s: channel '%s' is subsampled "
+		             "(%dx%d); only full-resolution channels are supported",
+		             exr->path, source, e->x_sampling, e->y_sampling);
+	if (e->pixel_type != EXR_PIXEL_UINT && e->pixel_type != EXR_PIXEL_HALF &&
+	    e->pixel_type != EXR_PIXEL_FLOAT)
+		return FAILX(SSS_ERR_EXR, "%s: channel '%s' has unknown pixel type "
+		             "%d", exr->path, source, (int)e->pixel_type);
+	char *name = qualified_name(exr, part, source);
+	if (!name)
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", exr->path);
+	const char *layer, *pass, *comp;
+	size_t layer_len, pass_len;
+	split_name(name, &layer, &layer_len, &pass, &pass_len, &comp);
 
-		/* Insertion in canonical order; names map to (layer, pass,
-		 * component) one way only except for odd leading dots, so a
-		 * clash is refused rather than one channel silently lost. */
-		int32_t at = p->count;
-		while (at > 0 && comp_cmp(comp, p->chan[at - 1].comp) < 0)
-			at--;
-		if (at > 0 && comp_cmp(comp, p->chan[at - 1].comp) == 0)
-			return FAILX(SSS_ERR_UNSUPPORTED, "%s: channels '%s' and '%s' "
-			             "are the same component of one pass", exr->path,
-			             p->chan[at - 1].name, name);
-		xchan *grown = realloc(p->chan, (size_t)(p->count + 1) *
-		                                sizeof *grown);
-		char *copy = dup_n(name, strlen(name));
-		if (grown)
-			p->chan = grown;
-		if (!grown || !copy) {
-			free(copy);
-			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory",
-			             exr->path);
+	xpass *p = NULL;
+	for (int32_t j = 0; j < exr->pass_count && !p; j++) {
+		xpass *q = &exr->passes[j];
+		if (strlen(q->layer) == layer_len &&
+		    memcmp(q->layer, layer, layer_len) == 0 &&
+		    strlen(q->pass) == pass_len &&
+		    memcmp(q->pass, pass, pass_len) == 0)
+			p = q;
+	}
+	if (!p && !(p = append_pass(exr, layer, layer_len, pass, pass_len))) {
+		free(name);
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", exr->path);
+	}
+
+	/* Insertion in canonical order; names map to (layer, pass, component)
+	 * one way only except for odd leading dots, so a clash (also of two
+	 * parts' channels) is refused rather than one channel silently lost. */
+	int32_t at = p->count;
+	while (at > 0 && comp_cmp(comp, p->chan[at - 1].comp) < 0)
+		at--;
+	if (at > 0 && comp_cmp(comp, p->chan[at - 1].comp) == 0) {
+		sss_result r = FAILX(SSS_ERR_UNSUPPORTED, "%s: channels '%s' and "
+		                     "'%s' are the same component of one pass",
+		                     exr->path, p->chan[at - 1].name, name);
+		free(name);
+		return r;
+	}
+	xchan *grown = realloc(p->chan, (size_t)(p->count + 1) * sizeof *grown);
+	if (!grown) {
+		free(name);
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", exr->path);
+	}
+	p->chan = grown;
+	memmove(&p->chan[at + 1], &p->chan[at],
+	        (size_t)(p->count - at) * sizeof *p->chan);
+	p->chan[at] = (xchan){name, comp, (int32_t)e->pixel_type, e->p_linear,
+	                      index};
+	p->count++;
+	return SSS_OK;
+}
+
+/* Groups the source's channels, part by part, into passes (in
+ * channel-list order), components sorted canonically. Pixel buffers are
+ * allocated later. */
+static sss_result group_channels(sss_exr *exr, char *errbuf,
+                                 size_t errbuf_len)
+{
+	int32_t index = 0;
+	for (int part = 0; part < exr->part_count; part++) {
+		const exr_attr_chlist_t *cl = NULL;
+		exr_result_t rv = exr_get_channels(exr->header, part, &cl);
+		if (rv != EXR_ERR_SUCCESS)
+			return exr_fail(errbuf, errbuf_len, exr->path, "reading the "
+			                "channel list", rv, &exr->io);
+		for (int i = 0; i < cl->num_channels; i++, index++) {
+			sss_result r = add_channel(exr, &cl->entries[i], part, index,
+			                           errbuf, errbuf_len);
+			if (r)
+				return r;
 		}
-		memmove(&p->chan[at + 1], &p->chan[at],
-		        (size_t)(p->count - at) * sizeof *p->chan);
-		p->chan[at] = (xchan){copy, copy + (comp - name),
-		                      (int32_t)e->pixel_type, e->p_linear, i};
-		p->count++;
 	}
 	for (int32_t j = 0; j < exr->pass_count; j++)
 		if (make_components(&exr->passes[j]))
@@ -492,6 +536,7 @@ typedef struct chan_ref {
 
 typedef struct read_job {
 	exr_context_t ctxt;
+	int part;
 	const sss_exr *exr;
 	const chan_ref *ref;     /* per source channel */
 	int tiled;
@@ -532,12 +577,13 @@ static exr_result_t chunk_at(const read_job *job, int32_t i,
 		int32_t tx = i % job->tiles_x, ty = i / job->tiles_x;
 		*x0 = tx * job->tile_w;
 		*y0 = ty * job->tile_h;
-		rv = exr_read_tile_chunk_info(job->ctxt, 0, tx, ty, 0, 0, ci);
+		rv = exr_read_tile_chunk_info(job->ctxt, job->part, tx, ty, 0, 0,
+		                              ci);
 	} else {
 		*x0 = 0;
 		*y0 = i * job->lines;
 		rv = exr_read_scanline_chunk_info(
-			job->ctxt, 0, exr->data_window.min.y + *y0, ci);
+			job->ctxt, job->part, exr->data_window.min.y + *y0, ci);
 		if (rv == EXR_ERR_SUCCESS)
 			*y0 = ci->start_y - exr->data_window.min.y;
 	}
@@ -596,8 +642,10 @@ static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 		int32_t x0 = 0, y0 = 0;
 		exr_result_t rv = chunk_at(job, i, &ci, &x0, &y0);
 		if (rv == EXR_ERR_SUCCESS) {
-			rv = started ? exr_decoding_update(job->ctxt, 0, &ci, &dec)
-			             : exr_decoding_initialize(job->ctxt, 0, &ci, &dec);
+			rv = started ? exr_decoding_update(job->ctxt, job->part, &ci,
+			                                   &dec)
+			             : exr_decoding_initialize(job->ctxt, job->part, &ci,
+			                                       &dec);
 			started = 1;
 		}
 		if (rv == EXR_ERR_SUCCESS && !dec.read_fn) {
@@ -611,7 +659,8 @@ static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 			for (int c = 1; c < dec.channel_count; c++)
 				dec.channels[c].decode_to_ptr =
 					dec.channels[0].decode_to_ptr;
-			rv = exr_decoding_choose_default_routines(job->ctxt, 0, &dec);
+			rv = exr_decoding_choose_default_routines(job->ctxt,
+			                                          job->part, &dec);
 			decompress = dec.decompress_fn;
 		}
 		if (rv == EXR_ERR_SUCCESS && job->b44)
@@ -620,7 +669,7 @@ static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 		if (rv == EXR_ERR_SUCCESS)
 			point_channels(job, &dec, x0, y0);
 		if (rv == EXR_ERR_SUCCESS)
-			rv = exr_decoding_run(job->ctxt, 0, &dec);
+			rv = exr_decoding_run(job->ctxt, job->part, &dec);
 		if (rv != EXR_ERR_SUCCESS)
 			job_fail(job, rv, x0, y0);
 	}
@@ -678,34 +727,62 @@ static int too_large(const char *path, xio *io, const sss_exr_options *o,
 	return hit;
 }
 
+/* Deep or unknown storage is refused; scanline and tiled parts are read. */
+static sss_result check_storage(sss_exr *exr, int part, char *errbuf,
+                                size_t errbuf_len)
+{
+	exr_storage_t storage;
+	exr_result_t rv = exr_get_storage(exr->header, part, &storage);
+	if (rv != EXR_ERR_SUCCESS)
+		return exr_fail(errbuf, errbuf_len, exr->path, "reading the header",
+		                rv, &exr->io);
+	if (storage == EXR_STORAGE_DEEP_SCANLINE ||
+	    storage == EXR_STORAGE_DEEP_TILED)
+		return FAILX(SSS_ERR_UNSUPPORTED, "%s: deep image data is not "
+		             "supported (render without deep output)", exr->path);
+	if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
+		return FAILX(SSS_ERR_EXR, "%s: unknown storage type %d", exr->path,
+		             (int)storage);
+	return SSS_OK;
+}
+
+/* Every part: its storage, and one data window for all (a pass is one
+ * image); the image's size and the part-0 windows kept for writing. */
 static sss_result read_header(sss_exr *exr, const sss_exr_options *o,
-                              const exr_attr_chlist_t **chlist, char *errbuf,
-                              size_t errbuf_len)
+                              char *errbuf, size_t errbuf_len)
 {
 	exr_context_t c = exr->header;
 	const char *path = exr->path;
 	int parts = 0;
-	exr_storage_t storage;
 	exr_result_t rv = exr_get_count(c, &parts);
 	if (rv == EXR_ERR_SUCCESS && parts < 1)
 		rv = EXR_ERR_FILE_BAD_HEADER;
-	if (rv == EXR_ERR_SUCCESS)
-		rv = exr_get_storage(c, 0, &storage);
 	if (rv != EXR_ERR_SUCCESS)
 		return exr_fail(errbuf, errbuf_len, path, "reading the header", rv,
 		                &exr->io);
-	if (storage == EXR_STORAGE_DEEP_SCANLINE ||
-	    storage == EXR_STORAGE_DEEP_TILED)
-		return FAILX(SSS_ERR_UNSUPPORTED, "%s: deep image data is not "
-		             "supported (render without deep output)", path);
-	if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
-		return FAILX(SSS_ERR_EXR, "%s: unknown storage type %d", path,
-		             (int)storage);
-
+	exr->part_count = parts;
+	sss_result r;
 	exr_attr_box2i_t dw;
-	if ((rv = exr_get_data_window(c, 0, &dw)) != EXR_ERR_SUCCESS)
-		return exr_fail(errbuf, errbuf_len, path, "reading the data "
-		                "window", rv, &exr->io);
+	for (int part = 0; part < parts; part++) {
+		exr_attr_box2i_t pw;
+		if ((r = check_storage(exr, part, errbuf, errbuf_len)))
+			return r;
+		if ((rv = exr_get_data_window(c, part, &pw)) != EXR_ERR_SUCCESS)
+			return exr_fail(errbuf, errbuf_len, path, "reading the data "
+			                "window", rv, &exr->io);
+		if (part == 0) {
+			dw = pw;
+		} else if (memcmp(&pw, &dw, sizeof dw) != 0) {
+			const char *name = NULL;
+			exr_get_name(c, part, &name);
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: part %d ('%s') has data "
+			             "window (%d,%d)-(%d,%d), part 0 (%d,%d)-(%d,%d); "
+			             "parts of different sizes are not supported", path,
+			             part, name ? name : "", pw.min.x, pw.min.y,
+			             pw.max.x, pw.max.y, dw.min.x, dw.min.y, dw.max.x,
+			             dw.max.y);
+		}
+	}
 	/* Sizes checked before anything is allocated. */
 	long long w = (long long)dw.max.x - dw.min.x + 1;
 	long long h = (long long)dw.max.y - dw.min.y + 1;
@@ -732,60 +809,33 @@ static sss_result read_header(sss_exr *exr, const sss_exr_options *o,
 	exr_get_pixel_aspect_ratio(c, 0, &exr->pixel_aspect);
 	exr_get_screen_window_center(c, 0, &exr->screen_center);
 	exr_get_screen_window_width(c, 0, &exr->screen_width);
-
-	if ((rv = exr_get_channels(c, 0, chlist)) != EXR_ERR_SUCCESS)
-		return exr_fail(errbuf, errbuf_len, path, "reading the channel "
-		                "list", rv, &exr->io);
 	return SSS_OK;
 }
 
-/* Allocates every pass and decodes every chunk of part 0 into them. */
-static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
-                               const exr_attr_chlist_t *cl, char *errbuf,
-                               size_t errbuf_len)
+/* Decodes every chunk of one part, each channel straight into its pass
+ * (ref: the part's channels, in its channel-list order). */
+static sss_result decode_part(sss_exr *exr, const sss_exr_options *o,
+                              int part, const chan_ref *ref, char *errbuf,
+                              size_t errbuf_len)
 {
 	exr_context_t c = exr->header;
 	const char *path = exr->path;
-	size_t npix = (size_t)exr->width * (size_t)exr->height;
-	for (int32_t j = 0; j < exr->pass_count; j++) {
-		xpass *p = &exr->passes[j];
-		if ((int64_t)exr->width * p->count * (int64_t)sizeof(float) >
-		    INT32_MAX)
-			return FAILX(SSS_ERR_UNSUPPORTED, "%s: pass '%s' has too many "
-			             "components (%d) for its width", path, p->pass,
-			             p->count);
-		if (npix > SIZE_MAX / sizeof(float) / (size_t)p->count ||
-		    !(p->data = calloc(npix * (size_t)p->count, sizeof(float))))
-			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: cannot allocate pass "
-			             "'%s' (%dx%d x %d)", path, p->pass, exr->width,
-			             exr->height, p->count);
-	}
-	if (cl->num_channels == 0)
-		return SSS_OK;
-
-	chan_ref *ref = calloc((size_t)cl->num_channels, sizeof *ref);
-	if (!ref)
-		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
-	for (int32_t j = 0; j < exr->pass_count; j++)
-		for (int32_t k = 0; k < exr->passes[j].count; k++)
-			ref[exr->passes[j].chan[k].index] =
-				(chan_ref){exr->passes[j].data, exr->passes[j].count, k};
-
-	read_job job = {.ctxt = c, .exr = exr, .ref = ref, .io = &exr->io};
+	read_job job = {.ctxt = c, .part = part, .exr = exr, .ref = ref,
+	                .io = &exr->io};
 	exr_storage_t storage = EXR_STORAGE_SCANLINE;
 	int32_t chunks = 0;
 	exr_compression_t comp = EXR_COMPRESSION_NONE;
-	exr_result_t rv = exr_get_storage(c, 0, &storage);
+	exr_result_t rv = exr_get_storage(c, part, &storage);
 	if (rv == EXR_ERR_SUCCESS)
-		rv = exr_get_compression(c, 0, &comp);
+		rv = exr_get_compression(c, part, &comp);
 	job.tiled = storage == EXR_STORAGE_TILED;
 	job.b44 = comp == EXR_COMPRESSION_B44 || comp == EXR_COMPRESSION_B44A;
 	if (rv == EXR_ERR_SUCCESS && job.tiled) {
 		/* Level 0 only: mip/rip levels below it are not needed. */
 		int32_t lw = 0, lh = 0;
-		rv = exr_get_tile_sizes(c, 0, 0, 0, &job.tile_w, &job.tile_h);
+		rv = exr_get_tile_sizes(c, part, 0, 0, &job.tile_w, &job.tile_h);
 		if (rv == EXR_ERR_SUCCESS)
-			rv = exr_get_level_sizes(c, 0, 0, 0, &lw, &lh);
+			rv = exr_get_level_sizes(c, part, 0, 0, &lw, &lh);
 		if (rv == EXR_ERR_SUCCESS &&
 		    (job.tile_w < 1 || job.tile_h < 1 || lw != exr->width ||
 		     lh != exr->height))
@@ -797,41 +847,87 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 			         (int32_t)(((int64_t)lh + job.tile_h - 1) / job.tile_h);
 		}
 	} else if (rv == EXR_ERR_SUCCESS) {
-		rv = exr_get_scanlines_per_chunk(c, 0, &job.lines);
+		rv = exr_get_scanlines_per_chunk(c, part, &job.lines);
 		if (rv == EXR_ERR_SUCCESS && job.lines < 1)
 			rv = EXR_ERR_FILE_BAD_HEADER;
 		if (rv == EXR_ERR_SUCCESS)
 			chunks = (int32_t)(((int64_t)exr->height + job.lines - 1) /
 			                   job.lines);
 	}
-	if (rv != EXR_ERR_SUCCESS) {
-		free(ref);
+	if (rv != EXR_ERR_SUCCESS)
 		return exr_fail(errbuf, errbuf_len, path, "reading the chunk "
 		                "layout", rv, &exr->io);
-	}
 
 	/* The first chunk on this thread loads the chunk offset table once;
 	 * then the rest in parallel, one pipeline per band of chunks. */
 	decode_chunks(&job, 0, 1);
-	if (job.rv == EXR_ERR_SUCCESS && chunks > 1) {
+	if (job.rv == EXR_ERR_SUCCESS && chunks > 1)
 		sss__parallel_rows(chunks - 1, o->num_threads, decode_rest, &job);
+	if (job.rv == EXR_ERR_SUCCESS)
+		return SSS_OK;
+	char what[160], where[48] = "";
+	const char *name = NULL;
+	if (exr->part_count > 1 &&
+	    exr_get_name(c, part, &name) == EXR_ERR_SUCCESS && name)
+		snprintf(where, sizeof where, "part '%.30s', ", name);
+	if (job.rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED)
+		snprintf(what, sizeof what, "decoding the pixels");
+	else if (job.tiled)
+		snprintf(what, sizeof what, "truncated or corrupt (%sthe tile at "
+		         "x %d, y %d)", where, exr->data_window.min.x + job.bad_x,
+		         exr->data_window.min.y + job.bad_y);
+	else
+		snprintf(what, sizeof what, "truncated or corrupt (%sthe scanlines "
+		         "from y %d)", where, exr->data_window.min.y + job.bad_y);
+	return exr_fail(errbuf, errbuf_len, path, what, job.rv, &exr->io);
+}
+
+/* Allocates every pass and decodes every part into them. */
+static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
+                               char *errbuf, size_t errbuf_len)
+{
+	const char *path = exr->path;
+	size_t npix = (size_t)exr->width * (size_t)exr->height;
+	int32_t channels = 0;
+	for (int32_t j = 0; j < exr->pass_count; j++) {
+		xpass *p = &exr->passes[j];
+		channels += p->count;
+		if ((int64_t)exr->width * p->count * (int64_t)sizeof(float) >
+		    INT32_MAX)
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: pass '%s' has too many "
+			             "components (%d) for its width", path, p->pass,
+			             p->count);
+		if (npix > SIZE_MAX / sizeof(float) / (size_t)p->count ||
+		    !(p->data = calloc(npix * (size_t)p->count, sizeof(float))))
+			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: cannot allocate pass "
+			             "'%s' (%dx%d x %d)", path, p->pass, exr->width,
+			             exr->height, p->count);
+	}
+	if (channels == 0)
+		return SSS_OK;
+
+	chan_ref *ref = calloc((size_t)channels, sizeof *ref);
+	if (!ref)
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		for (int32_t k = 0; k < exr->passes[j].count; k++)
+			ref[exr->passes[j].chan[k].index] =
+				(chan_ref){exr->passes[j].data, exr->passes[j].count, k};
+	sss_result r = SSS_OK;
+	int32_t first = 0;
+	for (int part = 0; part < exr->part_count && !r; part++) {
+		const exr_attr_chlist_t *cl = NULL;
+		exr_result_t rv = exr_get_channels(exr->header, part, &cl);
+		if (rv != EXR_ERR_SUCCESS)
+			r = exr_fail(errbuf, errbuf_len, path, "reading the channel "
+			             "list", rv, &exr->io);
+		else if (cl->num_channels > 0)
+			r = decode_part(exr, o, part, ref + first, errbuf, errbuf_len);
+		if (!r)
+			first += cl->num_channels;
 	}
 	free(ref);
-	if (job.rv != EXR_ERR_SUCCESS) {
-		char what[128];
-		if (job.tiled)
-			snprintf(what, sizeof what, "truncated or corrupt (the tile at "
-			         "x %d, y %d)", exr->data_window.min.x + job.bad_x,
-			         exr->data_window.min.y + job.bad_y);
-		else
-			snprintf(what, sizeof what, "truncated or corrupt (the "
-			         "scanlines from y %d)",
-			         exr->data_window.min.y + job.bad_y);
-		if (job.rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED)
-			snprintf(what, sizeof what, "decoding the pixels");
-		return exr_fail(errbuf, errbuf_len, path, what, job.rv, &exr->io);
-	}
-	return SSS_OK;
+	return r;
 }
 
 /* ----------------------------------------------------------------- read */
@@ -879,7 +975,6 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 	exr->dev = st.st_dev;
 	exr->ino = st.st_ino;
 
-	const exr_attr_chlist_t *cl = NULL;
 	exr_result_t rv = start_read(&exr->header, path, &exr->io, o.max_width,
 	                             o.max_height);
 	if (rv != EXR_ERR_SUCCESS) {
@@ -892,9 +987,9 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 		else
 			r = exr_fail(errbuf, errbuf_len, path, "not a readable "
 			             "OpenEXR file", rv, &exr->io);
-	} else if (!(r = read_header(exr, &o, &cl, errbuf, errbuf_len)) &&
-	           !(r = group_channels(exr, cl, errbuf, errbuf_len))) {
-		r = decode_image(exr, &o, cl, errbuf, errbuf_len);
+	} else if (!(r = read_header(exr, &o, errbuf, errbuf_len)) &&
+	           !(r = group_channels(exr, errbuf, errbuf_len))) {
+		r = decode_image(exr, &o, errbuf, errbuf_len);
 	}
 	/* The header stays in memory for sss_exr_write; the file is done. */
 	close(fd);

@@ -147,6 +147,9 @@ typedef struct tfile {
 	exr_compression_t comp;
 	int tile;                    /* 0: scanline; else square tiles */
 	int mip;                     /* tiled: write MIPMAP levels */
+	int multipart;               /* 1: a part per pass, named as the pass
+	                              * (Blender 5.0); 2: the same with channels
+	                              * named by their component only */
 	int nchan;
 	tchan ch[64];
 } tfile;
@@ -171,104 +174,145 @@ static const tchan *tfind(const tfile *f, const char *name)
 	return NULL;
 }
 
+/* The part (0 unless f->multipart) of channel i and, in *name, what the
+ * channel is called inside it. */
+static int tpart_of(const tfile *f, int i, char parts[][128], int *nparts,
+                    const char **name)
+{
+	const char *full = f->ch[i].name, *dot = strrchr(full, '.');
+	*name = full;
+	if (!f->multipart)
+		return 0;
+	size_t n = dot ? (size_t)(dot - full) : 0;
+	if (f->multipart == 2 && dot)
+		*name = dot + 1;
+	for (int p = 0; p < *nparts; p++)
+		if (strlen(parts[p]) == n && !strncmp(parts[p], full, n))
+			return p;
+	snprintf(parts[*nparts], 128, "%.*s", (int)n, full);
+	return (*nparts)++;
+}
+
 /* Writes f with raw OpenEXRCore calls; 0 on success. */
 static int write_test_exr(const char *path, const tfile *f)
 {
 	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
 	init.error_handler_fn = silent;
 	exr_context_t c;
-	int part;
+	char parts[64][128];
+	const char *inner[64];
+	int part_of[64], nparts = f->multipart ? 0 : 1;
+	for (int i = 0; i < f->nchan; i++)
+		part_of[i] = tpart_of(f, i, parts, &nparts, &inner[i]);
 	exr_result_t rv = exr_start_write(&c, path, EXR_WRITE_FILE_DIRECTLY,
 	                                  &init);
 	if (rv)
 		return rv;
-	rv = exr_add_part(c, NULL, f->tile ? EXR_STORAGE_TILED
-	                                   : EXR_STORAGE_SCANLINE, &part);
-	if (!rv)
-		rv = exr_initialize_required_attr_simple(c, part, f->w, f->h,
-		                                         f->comp);
-	exr_attr_box2i_t dw = {{{{f->x0, f->y0}}},
-	                       {{{f->x0 + f->w - 1, f->y0 + f->h - 1}}}};
-	exr_attr_box2i_t disp = {{{{0, 0}}}, {{{63, 47}}}};
-	if (!rv)
-		rv = exr_set_data_window(c, part, &dw);
-	if (!rv)
-		rv = exr_set_display_window(c, part, &disp);
-	if (!rv)
-		rv = exr_set_pixel_aspect_ratio(c, part, 1.25f);
-	if (!rv && f->tile)
-		rv = exr_set_tile_descriptor(c, part, (uint32_t)f->tile,
-		                             (uint32_t)f->tile,
-		                             f->mip ? EXR_TILE_MIPMAP_LEVELS
-		                                    : EXR_TILE_ONE_LEVEL,
-		                             EXR_TILE_ROUND_DOWN);
-	/* Given order, not sorted: the library must sort the list. */
-	for (int i = 0; !rv && i < f->nchan; i++)
-		rv = exr_add_channel(c, part, f->ch[i].name, f->ch[i].type,
-		                     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
-	/* Blender-like metadata that must survive a round trip. */
-	exr_attr_m44f_t m = {{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 3, 4, 1}};
-	if (!rv)
-		rv = exr_attr_set_string(c, part, "BlenderMultiChannel",
-		                         "Blender V2.55.1 and newer");
-	if (!rv)
-		rv = exr_attr_set_string(c, part, "RenderTime", "00:01.25");
-	if (!rv)
-		rv = exr_attr_set_m44f(c, part, "worldToCamera", &m);
-	if (!rv)
-		rv = exr_attr_set_int(c, part, "Frame", 42);
+	for (int part = 0; !rv && part < nparts; part++) {
+		int added;
+		rv = exr_add_part(c, f->multipart ? parts[part] : NULL,
+		                  f->tile ? EXR_STORAGE_TILED : EXR_STORAGE_SCANLINE,
+		                  &added);
+		if (!rv && added != part)
+			rv = EXR_ERR_INVALID_ARGUMENT;
+		if (!rv)
+			rv = exr_initialize_required_attr_simple(c, part, f->w, f->h,
+			                                         f->comp);
+		exr_attr_box2i_t dw = {{{{f->x0, f->y0}}},
+		                       {{{f->x0 + f->w - 1, f->y0 + f->h - 1}}}};
+		exr_attr_box2i_t disp = {{{{0, 0}}}, {{{63, 47}}}};
+		if (!rv)
+			rv = exr_set_data_window(c, part, &dw);
+		if (!rv)
+			rv = exr_set_display_window(c, part, &disp);
+		if (!rv)
+			rv = exr_set_pixel_aspect_ratio(c, part, 1.25f);
+		if (!rv && f->tile)
+			rv = exr_set_tile_descriptor(c, part, (uint32_t)f->tile,
+			                             (uint32_t)f->tile,
+			                             f->mip ? EXR_TILE_MIPMAP_LEVELS
+			                                    : EXR_TILE_ONE_LEVEL,
+			                             EXR_TILE_ROUND_DOWN);
+		/* Given order, not sorted: the library must sort the list. */
+		for (int i = 0; !rv && i < f->nchan; i++)
+			if (part_of[i] == part)
+				rv = exr_add_channel(c, part, inner[i], f->ch[i].type,
+				                     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+		if (part > 0)
+			continue;
+		/* Blender-like metadata that must survive a round trip (5.0 puts
+		 * it in the first part only). */
+		exr_attr_m44f_t m = {{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 3, 4,
+		                      1}};
+		if (!rv)
+			rv = exr_attr_set_string(c, part, "BlenderMultiChannel",
+			                         "Blender V2.55.1 and newer");
+		if (!rv)
+			rv = exr_attr_set_string(c, part, "RenderTime", "00:01.25");
+		if (!rv)
+			rv = exr_attr_set_m44f(c, part, "worldToCamera", &m);
+		if (!rv)
+			rv = exr_attr_set_int(c, part, "Frame", 42);
+	}
 	if (!rv)
 		rv = exr_write_header(c);
 
-	exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-	int started = 0;
-	int levels = 1;
-	if (!rv && f->tile && f->mip)
-		rv = exr_get_tile_levels(c, part, &levels, NULL);
-	for (int lv = 0; !rv && lv < levels; lv++) {
-		int32_t lw = f->w, lh = f->h, step = f->tile;
-		if (f->tile)
-			rv = exr_get_level_sizes(c, part, lv, lv, &lw, &lh);
-		else
-			rv = exr_get_scanlines_per_chunk(c, part, &step);
-		int nx = f->tile ? (lw + step - 1) / step : 1;
-		int ny = (lh + step - 1) / step;
-		for (int ty = 0; !rv && ty < ny; ty++)
-			for (int tx = 0; !rv && tx < nx; tx++) {
-				exr_chunk_info_t ci;
-				if (f->tile)
-					rv = exr_write_tile_chunk_info(c, part, tx, ty, lv, lv,
-					                               &ci);
-				else
-					rv = exr_write_scanline_chunk_info(
-						c, part, f->y0 + ty * step, &ci);
-				if (!rv)
-					rv = started ? exr_encoding_update(c, part, &ci, &enc)
-					             : exr_encoding_initialize(c, part, &ci,
-					                                       &enc);
-				for (int k = 0; !rv && k < enc.channel_count; k++) {
-					exr_coding_channel_info_t *ch = &enc.channels[k];
-					const tchan *t = tfind(f, ch->channel_name);
-					int b = bpe(t->type);
-					/* level > 0 takes any pixels: only level 0 is read */
-					size_t at = ((size_t)ty * step * f->w +
-					             (size_t)(f->tile ? tx * step : 0)) * b;
-					ch->encode_from_ptr = (const uint8_t *)t->data + at;
-					ch->user_pixel_stride = b;
-					ch->user_line_stride = f->w * b;
-					ch->user_bytes_per_element = (int16_t)b;
-					ch->user_data_type = (uint16_t)t->type;
+	for (int part = 0; !rv && part < nparts; part++) {
+		exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+		int started = 0;
+		int levels = 1;
+		if (f->tile && f->mip)
+			rv = exr_get_tile_levels(c, part, &levels, NULL);
+		for (int lv = 0; !rv && lv < levels; lv++) {
+			int32_t lw = f->w, lh = f->h, step = f->tile;
+			if (f->tile)
+				rv = exr_get_level_sizes(c, part, lv, lv, &lw, &lh);
+			else
+				rv = exr_get_scanlines_per_chunk(c, part, &step);
+			int nx = f->tile ? (lw + step - 1) / step : 1;
+			int ny = (lh + step - 1) / step;
+			for (int ty = 0; !rv && ty < ny; ty++)
+				for (int tx = 0; !rv && tx < nx; tx++) {
+					exr_chunk_info_t ci;
+					if (f->tile)
+						rv = exr_write_tile_chunk_info(c, part, tx, ty, lv,
+						                               lv, &ci);
+					else
+						rv = exr_write_scanline_chunk_info(
+							c, part, f->y0 + ty * step, &ci);
+					if (!rv)
+						rv = started
+						     ? exr_encoding_update(c, part, &ci, &enc)
+						     : exr_encoding_initialize(c, part, &ci, &enc);
+					for (int k = 0; !rv && k < enc.channel_count; k++) {
+						exr_coding_channel_info_t *ch = &enc.channels[k];
+						const tchan *t = NULL;
+						for (int i = 0; i < f->nchan && !t; i++)
+							if (part_of[i] == part &&
+							    !strcmp(inner[i], ch->channel_name))
+								t = &f->ch[i];
+						int b = bpe(t->type);
+						/* level > 0 takes any pixels: only level 0 is
+						 * read */
+						size_t at = ((size_t)ty * step * f->w +
+						             (size_t)(f->tile ? tx * step : 0)) * b;
+						ch->encode_from_ptr = (const uint8_t *)t->data + at;
+						ch->user_pixel_stride = b;
+						ch->user_line_stride = f->w * b;
+						ch->user_bytes_per_element = (int16_t)b;
+						ch->user_data_type = (uint16_t)t->type;
+					}
+					if (!rv && !started)
+						rv = exr_encoding_choose_default_routines(c, part,
+						                                          &enc);
+					started = 1;
+					if (!rv)
+						rv = exr_encoding_run(c, part, &enc);
 				}
-				if (!rv && !started)
-					rv = exr_encoding_choose_default_routines(c, part,
-					                                          &enc);
-				started = 1;
-				if (!rv)
-					rv = exr_encoding_run(c, part, &enc);
-			}
+		}
+		if (started)
+			exr_encoding_destroy(c, &enc);
 	}
-	if (started)
-		exr_encoding_destroy(c, &enc);
 	exr_result_t fr = exr_finish(&c);
 	return rv ? rv : fr;
 }
@@ -944,7 +988,19 @@ static void test_compressions(void)
 /* Blender 5.0 names its passes in full: the same render passes are found
  * under "Diffuse Direct", "Material Index" and so on, and the short names
  * still win where both are present. */
-static void test_blender5_pass_names(void)
+/* "exr.b5.<layout>.<name>": one case id per file layout. */
+static const char *b5_id(int multipart, const char *name)
+{
+	static char id[64];
+	static const char *const layout[] = {"single", "parts", "short"};
+	snprintf(id, sizeof id, "exr.b5.%s.%s", layout[multipart], name);
+	return id;
+}
+
+/* Blender 5.0's names, in one part (as 4.x lays a file out), a part per
+ * pass (as 5.0 saves a multilayer EXR) and a part per pass with channels
+ * named by component (as the multi-part convention allows). */
+static void test_blender5_pass_names(int multipart)
 {
 	static const char *names[] = {
 		"ViewLayer.Combined.R", "ViewLayer.Combined.G",
@@ -970,6 +1026,7 @@ static void test_blender5_pass_names(void)
 	f.w = 6;
 	f.h = 5;
 	f.comp = EXR_COMPRESSION_ZIP;
+	f.multipart = multipart;
 	f.nchan = (int)(sizeof names / sizeof *names);
 	for (int i = 0; i < f.nchan; i++) {
 		f.ch[i].name = names[i];
@@ -978,15 +1035,18 @@ static void test_blender5_pass_names(void)
 	}
 	char in[256];
 	tpath(in, sizeof in, "blender5.exr");
-	CHECK("exr.b5.write", write_test_exr(in, &f) == 0, "raw write");
+	char out[256];
+	tpath(out, sizeof out, "blender5_out.exr");
+	CHECK(b5_id(multipart, "raw_write"), write_test_exr(in, &f) == 0,
+	      "raw write");
 	sss_exr *exr = NULL;
-	CHECK_STATUS("exr.b5.read", SSS_OK,
+	CHECK_STATUS(b5_id(multipart, "read"), SSS_OK,
 	             sss_exr_read(in, NULL, &exr, errbuf, sizeof errbuf));
 	if (exr) {
 		sss_passes ps;
 		const char *used = NULL;
 		sss_image dd, dc, di, ix, em, tc, bl, shortdd;
-		CHECK_STATUS("exr.b5.render", SSS_OK,
+		CHECK_STATUS(b5_id(multipart, "render"), SSS_OK,
 		             sss_exr_render_passes(exr, NULL, &ps, &used, errbuf,
 		                                   sizeof errbuf));
 		sss_exr_find(exr, "ViewLayer", "Diffuse Direct", &dd);
@@ -997,21 +1057,36 @@ static void test_blender5_pass_names(void)
 		sss_exr_find(exr, "ViewLayer", "Transmission Color", &tc);
 		if (!used)
 			printf("  %s\n", errbuf);
-		CHECK("exr.b5.layer", used && !strcmp(used, "ViewLayer"),
+		CHECK(b5_id(multipart, "layer"), used && !strcmp(used, "ViewLayer"),
 		      "layer %s", used ? used : "(null)");
-		CHECK("exr.b5.views", ps.diff_dir.data == dd.data &&
+		CHECK(b5_id(multipart, "views"), ps.diff_dir.data == dd.data &&
 		      ps.diff_col.data == dc.data && ps.diff_ind.data == di.data &&
 		      ps.index_ma.data == ix.data && ps.emit.data == em.data &&
 		      ps.trans_col.data == tc.data && ps.gloss_ind.data == NULL &&
 		      ps.depth.data != NULL, "5.0 names not read");
-		CHECK_STATUS("exr.b5.find_short", SSS_OK,
+		CHECK_STATUS(b5_id(multipart, "find_short"), SSS_OK,
 		             sss_exr_find(exr, "SSSBackLight", "DiffDir", &bl));
-		CHECK_STATUS("exr.b5.render_short", SSS_OK,
+		CHECK_STATUS(b5_id(multipart, "render_short"), SSS_OK,
 		             sss_exr_render_passes(exr, "Zlayer", &ps, &used,
 		                                   errbuf, sizeof errbuf));
 		sss_exr_find(exr, "Zlayer", "Diffuse Direct", &shortdd);
-		CHECK("exr.b5.short_wins", ps.diff_dir.data != shortdd.data &&
-		      ps.diff_dir.data != NULL, "the short name must win");
+		CHECK(b5_id(multipart, "short_wins"),
+		      ps.diff_dir.data != shortdd.data && ps.diff_dir.data != NULL,
+		      "the short name must win");
+		CHECK(b5_id(multipart, "passes"), sss_exr_pass_count(exr) == 15,
+		      "%d passes", sss_exr_pass_count(exr));
+		CHECK(b5_id(multipart, "values"), check_values(exr, &f, NULL) == 0,
+		      "values differ");
+		/* Written back as one part with every channel's full name. */
+		CHECK_STATUS(b5_id(multipart, "write"), SSS_OK,
+		             sss_exr_write(exr, out, NULL, errbuf, sizeof errbuf));
+		sss_exr *back = NULL;
+		CHECK_STATUS(b5_id(multipart, "reread"), SSS_OK,
+		             sss_exr_read(out, NULL, &back, errbuf, sizeof errbuf));
+		CHECK(b5_id(multipart, "round_trip"), back &&
+		      sss_exr_pass_count(back) == 15 &&
+		      check_values(back, &f, NULL) == 0, "round trip differs");
+		sss_exr_free(back);
 		sss_exr_free(exr);
 	}
 	tfile_free(&f);
@@ -1375,6 +1450,45 @@ static void test_dwa(void)
 }
 
 /* Files valid as EXR that libsss refuses or reads partly. */
+/* Two 2-row half parts, "first" (Y, 2 wide) and "second" (Z, second_w
+ * wide), both 1 2 3 4 ... row by row; 0 on success. */
+static int write_two_parts(const char *path, int second_w)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	init.error_handler_fn = silent;
+	exr_context_t c;
+	int part;
+	uint16_t px[6] = {0x3c00, 0x4000, 0x4200, 0x4400, 0x4500, 0x4600};
+	int rv = exr_start_write(&c, path, EXR_WRITE_FILE_DIRECTLY, &init);
+	for (int i = 0; !rv && i < 2; i++)
+		rv = exr_add_part(c, i ? "second" : "first", EXR_STORAGE_SCANLINE,
+		                  &part) ||
+		     exr_initialize_required_attr_simple(c, part, i ? second_w : 2,
+		                                         2, EXR_COMPRESSION_NONE) ||
+		     exr_add_channel(c, part, i ? "Z" : "Y", EXR_PIXEL_HALF,
+		                     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+	if (!rv)
+		rv = exr_write_header(c);
+	for (int i = 0; !rv && i < 2; i++)
+		for (int y = 0; !rv && y < 2; y++) {
+			int w = i ? second_w : 2;
+			exr_chunk_info_t ci;
+			exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+			rv = exr_write_scanline_chunk_info(c, i, y, &ci) ||
+			     exr_encoding_initialize(c, i, &ci, &enc);
+			if (!rv) {
+				enc.channels[0].encode_from_ptr =
+					(const uint8_t *)(px + w * y);
+				enc.channels[0].user_pixel_stride = 2;
+				enc.channels[0].user_line_stride = 2 * w;
+				rv = exr_encoding_choose_default_routines(c, i, &enc) ||
+				     exr_encoding_run(c, i, &enc);
+			}
+			exr_encoding_destroy(c, &enc);
+		}
+	return exr_finish(&c) || rv;
+}
+
 static void test_unsupported(void)
 {
 	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -1420,44 +1534,18 @@ static void test_unsupported(void)
 	CHECK("exr.sampled.write", rv == 0, "sampled header %d", rv);
 	expect_bad("exr.sampled", p, SSS_ERR_UNSUPPORTED, "'RY'");
 
-	/* Two parts: the first is read. */
+	/* Two parts: both are read, each channel under its part's name. */
 	tpath(p, sizeof p, "multipart.exr");
-	uint16_t one[4] = {0x3c00, 0x4000, 0x4200, 0x4400}; /* 1 2 3 4 */
-	rv = exr_start_write(&c, p, EXR_WRITE_FILE_DIRECTLY, &init);
-	for (int i = 0; !rv && i < 2; i++)
-		rv = exr_add_part(c, i ? "second" : "first", EXR_STORAGE_SCANLINE,
-		                  &part) ||
-		     exr_initialize_required_attr_simple(c, part, 2, 2,
-		                                         EXR_COMPRESSION_NONE) ||
-		     exr_add_channel(c, part, i ? "Z" : "Y", EXR_PIXEL_HALF,
-		                     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
-	if (!rv)
-		rv = exr_write_header(c);
-	for (int i = 0; !rv && i < 2; i++)
-		for (int y = 0; !rv && y < 2; y++) {
-			exr_chunk_info_t ci;
-			exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-			rv = exr_write_scanline_chunk_info(c, i, y, &ci) ||
-			     exr_encoding_initialize(c, i, &ci, &enc);
-			if (!rv) {
-				enc.channels[0].encode_from_ptr =
-					(const uint8_t *)(one + 2 * y);
-				enc.channels[0].user_pixel_stride = 2;
-				enc.channels[0].user_line_stride = 4;
-				rv = exr_encoding_choose_default_routines(c, i, &enc) ||
-				     exr_encoding_run(c, i, &enc);
-			}
-			exr_encoding_destroy(c, &enc);
-		}
-	rv = exr_finish(&c) || rv;
-	CHECK("exr.multipart.write", rv == 0, "multipart %d", rv);
+	CHECK("exr.multipart.write", write_two_parts(p, 2) == 0, "multipart");
 	sss_exr *exr = NULL;
 	CHECK_STATUS("exr.multipart.read", SSS_OK,
 	             sss_exr_read(p, NULL, &exr, errbuf, sizeof errbuf));
-	sss_image v = {0};
-	CHECK("exr.multipart.first", exr && sss_exr_pass_count(exr) == 1 &&
-	      sss_exr_find(exr, "", "", &v) == SSS_OK && v.data[3] == 4.0f,
-	      "part 0 not read: %s", errbuf);
+	sss_image y = {0}, z = {0};
+	CHECK("exr.multipart.both", exr && sss_exr_pass_count(exr) == 2 &&
+	      sss_exr_find(exr, "", "first", &y) == SSS_OK &&
+	      sss_exr_find(exr, "", "second", &z) == SSS_OK &&
+	      y.data[3] == 4.0f && z.data[0] == 1.0f && z.data[3] == 4.0f,
+	      "parts not read: %s", errbuf);
 	if (exr) {
 		char out[256];
 		tpath(out, sizeof out, "multipart_out.exr");
@@ -1465,6 +1553,13 @@ static void test_unsupported(void)
 		             sss_exr_write(exr, out, NULL, errbuf, sizeof errbuf));
 	}
 	sss_exr_free(exr);
+
+	/* Parts of different sizes: refused, naming the part. */
+	tpath(p, sizeof p, "multipart_sizes.exr");
+	CHECK("exr.multipart_sizes.write", write_two_parts(p, 3) == 0,
+	      "multipart sizes");
+	expect_bad("exr.multipart_sizes", p, SSS_ERR_UNSUPPORTED,
+	           "part 1 ('second')");
 }
 
 /* Passes missing for libsss, and the hints. */
@@ -1701,7 +1796,8 @@ int main(void)
 	test_round_trip();
 	test_compressions();
 	test_file_output_names();
-	test_blender5_pass_names();
+	for (int multipart = 0; multipart <= 2; multipart++)
+		test_blender5_pass_names(multipart);
 	test_single_pass();
 	test_tiled();
 	test_bad_files();

@@ -1,18 +1,20 @@
 """Reading and writing EXR channels by name with OpenImageIO (test side:
 an implementation independent of the one under test)."""
+import os
+import sys
+
 import numpy as np
 import OpenImageIO as oiio
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                "..", "..", "blender_scripts"))
+from exr_io import read_exr_parts  # noqa: E402
+
 
 def read_channels(path):
-    """{channel name: float32 (h, w) array} of the first subimage."""
-    inp = oiio.ImageInput.open(str(path))
-    assert inp, oiio.geterror()
-    spec = inp.spec()
-    pixels = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return {name: np.array(pixels[:, :, i]) for i, name in
-            enumerate(spec.channelnames)}, spec
+    """{channel name: float32 (h, w) array} over every part, Blender 5.0's
+    full pass names under the short ones; and the first part's spec."""
+    return read_exr_parts(path)
 
 
 def read_raw(path):
