@@ -19,7 +19,10 @@ energy: a large thick box (2 x 2 m face, 1 m deep) faces an orthographic
 edge: the same box under a sun at normal incidence, half of it shadowed by
   a plate that only casts shadows (invisible to camera and to indirect
   rays): random walk against the SSS-off render scattered by libsss with
-  each Burley radius mapping (cycles, eevee, random-walk). Edge profiles
+  each Burley radius mapping (cycles, eevee, random-walk,
+  cycles-random-walk, cycles4-random-walk) and with what the add-on
+  asks for the method on this Blender ("measured": mapping and energy
+  calibration). Edge profiles
   are averaged along the edge, normalised by their lit plateau, and
   compared (RMSE over the profile); the Burley d that fits the random walk
   best is also searched (numerically integrated edge response). Written to
@@ -356,9 +359,18 @@ def part_edge(args):
             prw = profile_along(rw, n)
             poff = profile_along(off, n)
             results = {}
-            for mapping in ("cycles", "eevee", "random-walk"):
+            # Every mapping alone, and "measured": what the add-on asks
+            # for this method on this Blender (mapping and calibration).
+            measured = compat.WALK_CALIBRATION.get(args.method)
+            for mapping in ("cycles", "eevee", "random-walk",
+                            "cycles-random-walk", "cycles4-random-walk") + \
+                    (("measured",) if measured else ()):
                 desc = inp.replace(".exr", f"_{mapping}.json")
-                scene_json(desc, albedo, radius, mapping)
+                if mapping == "measured":
+                    scene_json(desc, albedo, radius, measured[0],
+                               calibration=measured[1])
+                else:
+                    scene_json(desc, albedo, radius, mapping)
                 img = scatter(inp, desc, inp.replace(".exr",
                                                      f"_{mapping}_sss.exr"))
                 results[mapping] = profile_along(img, n)
@@ -443,11 +455,13 @@ def part_texture(args):
         win = (slice(n // 4, 3 * n // 4), slice(n // 8, 7 * n // 8))
         mean_col = rgb(offch, "DiffCol")[win].reshape(-1, 3).mean(axis=0)
         res = {"no-sss": off}
+        # This Blender's measured mapping and calibration for the method.
+        mapping, calibration = compat.WALK_CALIBRATION.get(
+            args.method, ("cycles", None))
         for tex in ("post", "pre-and-post"):
-            for cal in (None, "cycles-random-walk"):
+            for cal in (None, calibration) if calibration else (None,):
                 desc = inp.replace(".exr", f"_{tex}_{cal}.json")
-                scene_json(desc, mean_col, radius, "cycles-random-walk", tex,
-                           cal)
+                scene_json(desc, mean_col, radius, mapping, tex, cal)
                 try:
                     res[f"{tex}{'+cal' if cal else ''}"] = scatter(
                         inp, desc, inp.replace(".exr", f"_{tex}_{cal}_o.exr"))

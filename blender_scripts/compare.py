@@ -2,7 +2,7 @@
 SSS and EEVEE's own SSS, on one .blend, headless.
 
     blender -b --python-exit-code 1 --python blender_scripts/compare.py -- \\
-        --scene SCENE.blend --out DIR [--quick] [--no-eevee]
+        --scene SCENE.blend --out DIR [--quick] [--no-eevee] [--no-denoise]
         [--resolution WxH] [--rw-samples 16,64,256,1024]
         [--samples 16,64,256] [--eevee-samples 64] [--name NAME]
 
@@ -16,6 +16,10 @@ machine under the same load):
   --samples count, then each method the library accepts (enumerated at run
   time: a method the library answers SSS_ERR_UNSUPPORTED is skipped with a
   message) on those passes, through the add-on's native binding;
+- OIDN (Blender's compositor Denoise node, with the render's albedo and
+  normal) on the random walk, on SSS off and on the default method at each
+  of their sample counts ("+oidn" rows; skipped where the node does not
+  denoise: a Blender built without OpenImageDenoise);
 - EEVEE with its own SSS, and EEVEE with SSS off plus each method. EEVEE
   3.4 has no Material Index pass: each scattering material gets a value AOV
   output ("SSSCovN", 1 on that material) for the render; the pixel's index
@@ -34,8 +38,8 @@ over the scattering pixels at full and at quarter resolution, SSIM, max
 error; metrics in compare_metrics.py), plot.png (error against total time,
 log axes, one line per method) and summary.txt (also in results.md): per
 sample count, the error reduction of the best and of the default method
-against the no-SSS render at the same samples, and the random-walk sample
-count reaching the same error, with both times.
+against the no-SSS render at the same samples (also both denoised), and
+the random-walk sample count reaching the same error, with both times.
 
 The .blend is opened, never saved; the add-on restores what it switches
 off. --quick: 160x120, random walk 16/64/256 (reference 256), our methods
@@ -90,6 +94,9 @@ def parse_args():
                    "(default 16,64,256)")
     p.add_argument("--eevee-samples", type=int)
     p.add_argument("--no-eevee", action="store_true")
+    p.add_argument("--no-denoise", action="store_true",
+                   help="no OIDN rows (the random walk, SSS off and the "
+                   "default method, each denoised)")
     args = p.parse_args(argv)
     q = args.quick
 
@@ -190,10 +197,12 @@ def open_scene(args, engine):
         scene.cycles.sample_clamp_direct = 0.0
         scene.cycles.sample_clamp_indirect = 10.0
         scene.cycles.use_adaptive_sampling = False
+        # Albedo and normal for OIDN (denoise_rows): every Cycles render
+        # keeps them, so all pay the same.
+        for layer in scene.view_layers:
+            layer.cycles.denoising_store_passes = True
     else:
-        scene.eevee.use_bloom = False
-        scene.eevee.use_gtao = False
-        scene.eevee.taa_render_samples = args.eevee_samples
+        compat.plain_eevee(scene, args.eevee_samples)
     return scene
 
 
@@ -226,12 +235,15 @@ class Bench:
         self.edges = None
 
     def add(self, renderer, method, samples, render_s, post_s, image,
-            io_s=0.0):
+            io_s=0.0, path=None):
+        """A row; path: the EXR it came from (for denoise_rows)."""
         self.rows.append(dict(renderer=renderer, method=method,
                               samples=samples, render_s=render_s,
                               post_s=post_s, io_s=io_s,
                               total_s=render_s + post_s,
                               image=image[:, :, :3].astype(np.float32)))
+        if path:
+            self.rows[-1]["path"] = path
         log(f"{renderer:>6} {method:<16} {samples:>5} spp  render "
             f"{render_s:7.2f} s  post {post_s:6.3f} s")
 
@@ -246,9 +258,10 @@ def run_rw(bench, args):
         scene.cycles.samples = n
         scene.cycles.seed = seed
         seconds = render(scene)
-        ch = save_result(scene, os.path.join(bench.work, f"rw_{n}.exr"))
+        path = os.path.join(bench.work, f"rw_{n}.exr")
+        ch = save_result(scene, path)
         bench.add("cycles", "random-walk", n, seconds, 0.0,
-                  rgb(ch, "Combined"))
+                  rgb(ch, "Combined"), path=path)
     n = args.rw_samples[-1]
     halves, seconds = render_reference(
         scene, n, os.path.join(bench.work, f"rw_{n}"))
@@ -301,7 +314,8 @@ def scattering_pixels(ch, found):
 
 def apply_methods(bench, renderer, samples, render_s, inp, desc, base_rgb):
     from separable_sss import native
-    bench.add(renderer, "no-sss", samples, render_s, 0.0, base_rgb)
+    bench.add(renderer, "no-sss", samples, render_s, 0.0, base_rgb,
+              path=inp)
     with native.Scene(desc) as sc:
         for name, code in bench.methods:
             out = inp.replace("_passes.exr", f"_{name}.exr")
@@ -322,7 +336,8 @@ def apply_methods(bench, renderer, samples, render_s, inp, desc, base_rgb):
             ch = read_exr(out)
             bench.add(renderer, name, samples, render_s, t["scatter"],
                       rgb(ch, "SSS.Combined") if "SSS.Combined.R" in ch
-                      else rgb(ch, "Combined"), t["read"] + t["write"])
+                      else rgb(ch, "Combined"), t["read"] + t["write"],
+                      path=out)
 
 
 def run_sss_off(bench, args):
@@ -416,6 +431,72 @@ def run_eevee(bench, args):
 
 
 # --------------------------------------------------------------- results
+
+# ----------------------------------------------------------- denoising
+
+DENOISED = "+oidn"   # method suffix of a denoised row
+
+
+def denoise_jobs(bench):
+    """(source row, EXR, layer of its image) for each image an artist
+    would denoise: the random walk's (not the reference), SSS off and the
+    default method, at every sample count."""
+    jobs = []
+    for r in bench.rows:
+        if r["renderer"] != "cycles" or "path" not in r:
+            continue
+        if r["method"] == "random-walk":
+            jobs.append((r, r["path"], "ViewLayer"))
+        elif r["method"] == "no-sss":
+            jobs.append((r, r["path"], "ViewLayer"))
+        elif r["method"] == bench.default_method:
+            jobs.append((r, r["path"], "SSS"))
+    return jobs
+
+
+def denoise_rows(bench, args):
+    """Blender's compositor Denoise node (OIDN, with the render's albedo
+    and normal) on each job's image, in a compositor-only render (no Render
+    Layers node: Blender composites without rendering the scene again).
+    Adds a row per job: its render time, post = its post-process plus the
+    denoise."""
+    jobs = denoise_jobs(bench)
+    if not jobs:
+        return
+    scene = open_scene(args, "CYCLES")
+    tree = compat.compositor_tree(scene, create=True)
+    for node in list(tree.nodes):
+        tree.nodes.remove(node)
+    out = compat.composite_input(tree, create=True)
+    image_node = tree.nodes.new("CompositorNodeImage")
+    aux_node = tree.nodes.new("CompositorNodeImage")
+    denoise = tree.nodes.new("CompositorNodeDenoise")
+    tree.links.new(denoise.outputs[0], out)
+    scene.render.use_compositing = True
+    for row, path, layer in jobs:
+        image = bpy.data.images.load(path, check_existing=False)
+        image_node.image = aux_node.image = image
+        image_node.layer, aux_node.layer = layer, "ViewLayer"
+        tree.links.new(image_node.outputs["Combined"],
+                       denoise.inputs["Image"])
+        tree.links.new(aux_node.outputs["Denoising Normal"],
+                       denoise.inputs["Normal"])
+        tree.links.new(aux_node.outputs["Denoising Albedo"],
+                       denoise.inputs["Albedo"])
+        seconds = render(scene)
+        result = save_result(scene, path.replace(".exr", "_oidn.exr"))
+        img = rgb(result, "Composite.Combined")
+        bpy.data.images.remove(image)
+        if np.array_equal(img, row["image"]):
+            msg = ("OIDN rows skipped: this Blender's Denoise node leaves "
+                   "the image as it is (built without OpenImageDenoise)")
+            bench.skipped.append(msg)
+            log(msg)
+            return
+        bench.add(row["renderer"], row["method"] + DENOISED, row["samples"],
+                  row["render_s"], row["post_s"] + seconds, img,
+                  row["io_s"])
+
 
 COLUMNS = ("scene", "renderer", "method", "samples", "render_s", "post_s",
            "io_s", "total_s", "rmse", "rel_mae", "rmse_q", "rel_mae_q",
@@ -555,12 +636,32 @@ def summarise(bench, args):
                         f"pixels): RMSE {r['rmse_in_c']:.4g} vs no-sss "
                         f"{base['rmse_in_c']:.4g} ("
                         f"{cut(r['rmse_in_c'], base['rmse_in_c']):.1f} % less)")
+            if renderer == "cycles":
+                out += oidn_lines(rows, n, default)
     out += goal_lines(rows, default)
     for r in rows:
         if r["method"] == "eevee-sss":
             out.append(f"  eevee own SSS {r['samples']} spp: RMSE "
                        f"{err(r, 'rmse'):.4g} in {r['total_s']:.2f} s")
     return out
+
+
+def oidn_lines(rows, n, default):
+    """The default method and SSS off, both denoised (OIDN), and the random
+    walk denoised at the same samples."""
+    def row(method):
+        return next((r for r in rows if r["renderer"] == "cycles" and
+                     r["method"] == method and r["samples"] == n), None)
+    base, ours = row("no-sss" + DENOISED), row(default + DENOISED)
+    if not (base and ours):
+        return []
+    rw = row("random-walk" + DENOISED)
+    return [f"    with OIDN on both: {default}{DENOISED} RMSE "
+            f"{err(ours, 'rmse'):.4g} vs no-sss{DENOISED} "
+            f"{err(base, 'rmse'):.4g}: "
+            f"{cut(err(ours, 'rmse'), err(base, 'rmse')):.1f} % less error"
+            + (f"; random-walk{DENOISED} at {n} spp: RMSE "
+               f"{err(rw, 'rmse'):.4g}" if rw else "")]
 
 
 def noise_ceiling(rows, base):
@@ -756,6 +857,8 @@ def main():
     bench.default_method = scene.sss.method.lower()
     run_rw(bench, args)
     run_sss_off(bench, args)
+    if not args.no_denoise:
+        denoise_rows(bench, args)
     if not args.no_eevee:
         try:
             run_eevee(bench, args)

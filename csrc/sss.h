@@ -187,25 +187,35 @@ enum sss_burley_mapping {
 	SSS_BURLEY_EEVEE = 1,       /* d = 0.0459101 radius, EEVEE legacy */
 	SSS_BURLEY_RANDOM_WALK = 2, /* radius = diffuse mean free path:
 	                               d = radius / (3.5 + 100 (A - 0.33)^4) */
-	SSS_BURLEY_CYCLES_RANDOM_WALK = 3 /* what Cycles 3.x's random walk
-	                               does with the radius, as measured
-	                               (sss_calibration.c): mean free path
-	                               l = radius sqrt(3 (1 - a')), a' from
-	                               Jensen's dipole Rd(a') = A (eta 1.4),
-	                               d = l / (1.9 - A + 3.5 (A - 0.8)^2) */
+	SSS_BURLEY_CYCLES_RANDOM_WALK = 3, /* what Cycles 3.x's Random Walk
+	                               (and 4.x/5.x's Random Walk (Skin), the
+	                               same within 5 %) does with the radius,
+	                               as measured (sss_calibration.c): mean
+	                               free path l = radius sqrt(3 (1 - a')),
+	                               a' from Jensen's dipole Rd(a') = A
+	                               (eta 1.4), d = l / (1.9 - A + 3.5
+	                               (A - 0.8)^2) */
+	SSS_BURLEY_CYCLES4_RANDOM_WALK = 4 /* what Cycles 4.x/5.x's Random
+	                               Walk (not Skin) does with the radius,
+	                               as measured: d / radius from 0.017 at
+	                               A = 0.05 to 0.104 at A >= 0.95 */
 };
 
 /* Matching another renderer's energy (sss_material.calibration). */
 enum sss_calibration {
 	SSS_CALIBRATION_NONE = 0,
-	SSS_CALIBRATION_CYCLES_RANDOM_WALK = 1 /* the diffuse light of a
-	                               scattering pixel is scaled per channel
-	                               by g(DiffCol), the random walk's
-	                               reflectance over the Principled diffuse
-	                               lobe's, measured on thick slabs
-	                               (sss_calibration.c), after the blur
-	                               (a brighter DiffCol where light
-	                               leaves, as the random walk has) */
+	SSS_CALIBRATION_CYCLES_RANDOM_WALK = 1, /* Cycles 3.x's Random Walk:
+	                               the diffuse light of a scattering pixel
+	                               is scaled per channel by g(DiffCol), the
+	                               random walk's reflectance over the
+	                               Principled diffuse lobe's, measured on
+	                               thick slabs (sss_calibration.c), after
+	                               the blur (a brighter DiffCol where
+	                               light leaves, as the random walk has) */
+	SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN = 2, /* the same for Cycles
+	                               4.x/5.x's Random Walk (Skin) */
+	SSS_CALIBRATION_CYCLES4_RANDOM_WALK = 3 /* and for 4.x/5.x's Random
+	                               Walk */
 };
 
 enum sss_texturing {

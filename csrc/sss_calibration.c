@@ -1,7 +1,8 @@
-/* sss_calibration.c - what Cycles 3.4's random-walk SSS does that a blur of
- * the SSS-off render does not, measured once on flat slabs
- * (blender_scripts/calibrate.py, Blender 3.4.1, Cycles CPU, denoising,
- * adaptive sampling and clamping off).
+/* sss_calibration.c - what Cycles' random-walk SSS does that a blur of
+ * the SSS-off render does not, measured on flat slabs
+ * (blender_scripts/calibrate.py, Cycles CPU, denoising, adaptive sampling
+ * and clamping off): Blender 3.4.1 in sections 1 and 2, 4.5.15 and 5.0.1
+ * (4.0 rewrote the random walk) in section 3.
  *
  * 1. Energy. A box 6 x 6 m wide and 4 m deep (2 x 2 x 1 m for the world
  *    runs), Principled BSDF with Specular 0 and Roughness 0.5, Base Color =
@@ -83,32 +84,118 @@
  *    0.063 / 0.103 / 0.040; 0.7: 0.021 / 0.061 / 0.051; 0.8: 0.018 /
  *    0.028 / 0.048; 0.9: 0.064 / 0.026 / 0.056; 0.95: 0.054 / 0.027 /
  *    0.033 - each older mapping wins only where its d crosses the fit.
+ *
+ * 3. Blender 4.5.15 and 5.0.1 (Principled v2, Subsurface Weight 1, Scale
+ *    x Radius = r, IOR Level 0, default Subsurface IOR and Anisotropy),
+ *    the same protocols. 5.0.1 measures as 4.5.15 within the errors
+ *    (0.003 at most apart), so one table serves 4.x and 5.x. On the
+ *    infinite slab the ratio is now the same to 4 digits for the white
+ *    world, a sun at 0 and at 60 degrees and r = 0.05, 0.2 and 0.3 m
+ *    (standard errors 0.0005 - 0.003):
+ *
+ *      A      Skin 4.5  Skin 5.0  RW 4.5  RW 5.0
+ *      0.05   0.9036    0.9031    0.7686  0.7703
+ *      0.1    0.9087    0.9079    0.7808  0.7827
+ *      0.2    0.9196    0.9199    0.8054  0.8080
+ *      0.3    0.9317    0.9297    0.8328  0.8293
+ *      0.4    0.9436    0.9415    0.8575  0.8558
+ *      0.5    0.9545    0.9535    0.8819  0.8815
+ *      0.6    0.9646    0.9633    0.9059  0.9055
+ *      0.7    0.9763    0.9753    0.9318  0.9323
+ *      0.8    0.9889    0.9896    0.9609  0.9616
+ *      0.85   0.9951    0.9975    0.9722  0.9737
+ *      0.9    0.9916    0.9921    0.9763  0.9782
+ *      0.95   0.9546    0.9552    0.9416  0.9435
+ *      0.98   0.9262    0.9282    0.9128  0.9147
+ *      0.99   0.9168    0.9189    0.9036  0.9054
+ *      1.0    0.9055    0.9062    0.8945  0.8964
+ *
+ *    (the tables: 4.5's, A = 0 as at 0.05, A = 0.99 and 1 moved within
+ *    their errors so that A g(A) never decreases; between the points
+ *    the reflectance A g(A) is interpolated, not g). Random Walk (Skin), the
+ *    3.x walk, now loses up to 10 % at low albedo where 3.4's kept 1 %
+ *    more than the diffuse lobe; Random Walk loses up to 23 %; both level
+ *    off at a reflectance of about 0.90.
+ *
+ *    Shape (r = 0.3 m, 0.4 m at 128 x 128): Random Walk (Skin) fits d / r
+ *    = 0.316 0.293 0.242 0.207 0.171 0.147 0.121 0.100 0.068 0.052 0.032
+ *    0.033 at A = 0.05 0.1 0.2 ... 0.8 0.85 0.9 0.95, 3.4's mapping
+ *    within 5 % (8 % at 0.85): it keeps SSS_BURLEY_CYCLES_RANDOM_WALK.
+ *    Random Walk widens the other way, with the albedo:
+ *
+ *      A      0.05   0.1    0.2    0.3    0.4    0.5    0.6    0.7
+ *      d/r    0.0171 0.0192 0.0251 0.0304 0.0369 0.0447 0.0541 0.0656
+ *      A      0.8    0.85   0.9    0.95 .. 1
+ *      d/r    0.0825 0.0891 0.100  0.1039
+ *
+ *    (r = 0.05 m at 64 x 64 gave the same within 10 %, below a pixel at
+ *    low A), and SSS_BURLEY_CYCLES4_RANDOM_WALK interpolates it. 5.0.1:
+ *    the same fits within 4 % (one step of the fit's grid), for both walks.
  */
 #include "sss_internal.h"
 
-/* Reflectance of the random walk over the Principled diffuse lobe's. */
+/* Reflectance of the random walk over the Principled diffuse lobe's, at
+ * the albedos of cal_albedo, per calibration (section 1 and 3). */
 static const float cal_albedo[] = {0.0f, 0.05f, 0.1f, 0.2f, 0.3f, 0.4f, 0.5f,
                                    0.6f, 0.7f, 0.8f, 0.85f, 0.9f, 0.95f,
                                    0.98f, 0.99f, 1.0f};
-static const float cal_gain[] = {1.010f, 1.010f, 1.012f, 1.011f, 1.013f,
-                                 1.011f, 1.012f, 1.010f, 1.009f, 1.012f,
-                                 1.011f, 1.006f, 0.968f, 0.9405f, 0.9315f,
-                                 0.9225f};
 #define CAL_N ((int)(sizeof cal_albedo / sizeof *cal_albedo))
+static const float cal_gain[][CAL_N] = {
+	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
+		1.010f, 1.010f, 1.012f, 1.011f, 1.013f, 1.011f, 1.012f, 1.010f,
+		1.009f, 1.012f, 1.011f, 1.006f, 0.968f, 0.9405f, 0.9315f,
+		0.9225f},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
+		0.9036f, 0.9036f, 0.9087f, 0.9196f, 0.9317f, 0.9436f, 0.9545f,
+		0.9646f, 0.9763f, 0.9889f, 0.9951f, 0.9916f, 0.9546f, 0.9262f,
+		0.9170f, 0.9080f},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
+		0.7686f, 0.7686f, 0.7808f, 0.8054f, 0.8328f, 0.8575f, 0.8819f,
+		0.9059f, 0.9318f, 0.9609f, 0.9722f, 0.9763f, 0.9416f, 0.9128f,
+		0.9036f, 0.8946f},
+};
 
-static float rw_gain(float a)
+/* Piecewise linear in cal_albedo, clamped at both ends; 1 for NaN. */
+static float lerp_table(const float *table, float a)
 {
 	if (!isfinite(a))
 		return 1.0f;
 	if (a <= 0.0f)
-		return cal_gain[0];
+		return table[0];
 	if (a >= 1.0f)
-		return cal_gain[CAL_N - 1];
+		return table[CAL_N - 1];
 	int i = 1;
 	while (i < CAL_N - 1 && cal_albedo[i] < a)
 		i++;
 	float t = (a - cal_albedo[i - 1]) / (cal_albedo[i] - cal_albedo[i - 1]);
-	return cal_gain[i - 1] + t * (cal_gain[i] - cal_gain[i - 1]);
+	return table[i - 1] + t * (table[i] - table[i - 1]);
+}
+
+/* g(A) with the reflectance A g(A), not g, interpolated linearly: where
+ * the walk's reflectance levels off (g ~ 1/A) a linear g would overshoot
+ * between the points and A g(A) would fall again. Below the first
+ * point g is its value; NaN gives 1. */
+static float gain_at(const float *table, float a)
+{
+	if (!isfinite(a))
+		return 1.0f;
+	if (a <= cal_albedo[1])
+		return table[1];
+	if (a >= 1.0f)
+		return table[CAL_N - 1];
+	int i = 2;
+	while (i < CAL_N - 1 && cal_albedo[i] < a)
+		i++;
+	float a0 = cal_albedo[i - 1], a1 = cal_albedo[i];
+	float t = (a - a0) / (a1 - a0);
+	float r = a0 * table[i - 1] + t * (a1 * table[i] - a0 * table[i - 1]);
+	return r / a;
+}
+
+static int is_calibration(int32_t calibration)
+{
+	return calibration > SSS_CALIBRATION_NONE &&
+	       calibration <= SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
 }
 
 sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
@@ -116,26 +203,26 @@ sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
 {
 	if (!albedo || !gain)
 		return SSS_ERR_INVALID_ARGUMENT;
-	if (calibration != SSS_CALIBRATION_NONE &&
-	    calibration != SSS_CALIBRATION_CYCLES_RANDOM_WALK)
+	if (calibration != SSS_CALIBRATION_NONE && !is_calibration(calibration))
 		return SSS_ERR_INVALID_ARGUMENT;
 	for (int c = 0; c < 3; c++)
-		gain[c] = calibration == SSS_CALIBRATION_CYCLES_RANDOM_WALK
-		          ? rw_gain(albedo[c]) : 1.0f;
+		gain[c] = is_calibration(calibration)
+		          ? gain_at(cal_gain[calibration], albedo[c]) : 1.0f;
 	return SSS_OK;
 }
 
 void sss__calibration_apply(const sss_material *mat, const float *diff_col,
                             float *light)
 {
-	if (mat->calibration != SSS_CALIBRATION_CYCLES_RANDOM_WALK)
+	if (!is_calibration(mat->calibration))
 		return;
+	const float *table = cal_gain[mat->calibration];
 	float s = mat->strength;
 	for (int c = 0; c < 3; c++) {
 		float m = mat->kind == SSS_PROFILE_JIMENEZ
 		          ? s * mat->jimenez_strength[c] : s;
 		if (m > 0.0f)
-			light[c] *= 1.0f + m * (rw_gain(diff_col[c]) - 1.0f);
+			light[c] *= 1.0f + m * (gain_at(table, diff_col[c]) - 1.0f);
 	}
 }
 
@@ -179,4 +266,15 @@ double sss__cycles_rw_d_over_radius(double albedo)
 	if (a < 0.995 && d < CYCLES_RW_MIN_D)
 		d = CYCLES_RW_MIN_D;
 	return d;
+}
+
+/* Section 3: Cycles 4.x/5.x's Random Walk, d / radius at cal_albedo
+ * (A = 0 as at 0.05: the fit cannot go below a pixel there). */
+static const float cycles4_rw_d[CAL_N] = {
+	0.0171f, 0.0171f, 0.0192f, 0.0251f, 0.0304f, 0.0369f, 0.0447f, 0.0541f,
+	0.0656f, 0.0825f, 0.0891f, 0.100f, 0.1039f, 0.1039f, 0.1039f, 0.1039f};
+
+double sss__cycles4_rw_d_over_radius(double albedo)
+{
+	return lerp_table(cycles4_rw_d, (float)albedo);
 }

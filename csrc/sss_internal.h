@@ -65,10 +65,11 @@ void sss__line_mass3(const sss__kernel *k, double a, double b,
                      double out[3]);
 
 /* Calibration against Cycles' random walk (sss_calibration.c): Burley d
- * over the radius for an albedo (SSS_BURLEY_CYCLES_RANDOM_WALK), and the
- * per-pixel energy gain 1 + strength (g(DiffCol) - 1) on the scattered
- * light. */
+ * over the radius for an albedo (SSS_BURLEY_CYCLES_RANDOM_WALK, and
+ * SSS_BURLEY_CYCLES4_RANDOM_WALK), and the per-pixel energy gain
+ * 1 + strength (g(DiffCol) - 1) on the scattered light. */
 double sss__cycles_rw_d_over_radius(double albedo);
+double sss__cycles4_rw_d_over_radius(double albedo);
 void sss__calibration_apply(const sss_material *mat, const float *diff_col,
                             float *light);
 

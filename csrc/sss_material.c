@@ -125,8 +125,8 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 
 	if ((r = sss__transmission_validate(mat, errbuf, errbuf_len)))
 		return r;
-	if (mat->calibration != SSS_CALIBRATION_NONE &&
-	    mat->calibration != SSS_CALIBRATION_CYCLES_RANDOM_WALK)
+	if (mat->calibration < SSS_CALIBRATION_NONE ||
+	    mat->calibration > SSS_CALIBRATION_CYCLES4_RANDOM_WALK)
 		return FAIL("material %d: unknown calibration %d", idx,
 		            mat->calibration);
 
@@ -136,11 +136,10 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 		                errbuf_len)))
 			return r;
 		if (mat->burley_mapping < SSS_BURLEY_CYCLES ||
-		    mat->burley_mapping > SSS_BURLEY_CYCLES_RANDOM_WALK)
+		    mat->burley_mapping > SSS_BURLEY_CYCLES4_RANDOM_WALK)
 			return FAIL("material %d: unknown burley_mapping %d", idx,
 			            mat->burley_mapping);
-		if ((mat->burley_mapping == SSS_BURLEY_RANDOM_WALK ||
-		     mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK) &&
+		if (mat->burley_mapping >= SSS_BURLEY_RANDOM_WALK &&
 		    (r = check3(mat->albedo, 0.0f, 1.0f, 0, "albedo", idx, errbuf,
 		                errbuf_len)))
 			return r;
@@ -226,6 +225,10 @@ sss_result sss_burley_d(const sss_material *mat, double d_out[3])
 		}
 		case SSS_BURLEY_CYCLES_RANDOM_WALK:
 			d_out[c] = radius * sss__cycles_rw_d_over_radius(
+			                        mat->albedo[c]);
+			break;
+		case SSS_BURLEY_CYCLES4_RANDOM_WALK:
+			d_out[c] = radius * sss__cycles4_rw_d_over_radius(
 			                        mat->albedo[c]);
 			break;
 		default:

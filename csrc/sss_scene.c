@@ -313,10 +313,13 @@ static const name_value mappings[] = {
 	{"cycles", SSS_BURLEY_CYCLES}, {"eevee", SSS_BURLEY_EEVEE},
 	{"random-walk", SSS_BURLEY_RANDOM_WALK},
 	{"cycles-random-walk", SSS_BURLEY_CYCLES_RANDOM_WALK},
+	{"cycles4-random-walk", SSS_BURLEY_CYCLES4_RANDOM_WALK},
 };
 static const name_value calibrations[] = {
 	{"none", SSS_CALIBRATION_NONE},
 	{"cycles-random-walk", SSS_CALIBRATION_CYCLES_RANDOM_WALK},
+	{"cycles4-random-walk-skin", SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN},
+	{"cycles4-random-walk", SSS_CALIBRATION_CYCLES4_RANDOM_WALK},
 };
 static const name_value transmissions[] = {
 	{"off", SSS_TRANSMISSION_OFF}, {"burley", SSS_TRANSMISSION_BURLEY},

@@ -1,6 +1,7 @@
 /* test_calibration.c - the measured match to Cycles' random walk: the
- * energy table (finite, reflectance A g(A) never decreasing, gain 1 where
- * no calibration applies), the cycles-random-walk radius mapping, and
+ * energy tables (finite, reflectance A g(A) never decreasing, gain 1 where
+ * no calibration applies), the cycles-random-walk and cycles4-random-walk
+ * radius mappings, and
  * sss_apply's invariants with a calibrated material (radius 0, strength 0
  * and radius_scale 0 stay the identity; the gain scales a flat field by
  * exactly g(DiffCol)). */
@@ -33,23 +34,40 @@ static void flat_passes(sss_passes *p, float *dd, float *col, float *z,
 
 static void test_table(void)
 {
-	float prev = -1.0f;
-	int monotone = 1, finite = 1, sane = 1;
-	for (int i = 0; i <= 1000; i++) {
-		float a = (float)i / 1000.0f, al[3] = {a, a, a}, g[3];
-		CHECK_STATUS("table-status", SSS_OK,
-		             sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK,
-		                                  al, g));
-		finite &= isfinite(g[0]) && g[0] == g[1] && g[1] == g[2];
-		sane &= g[0] > 0.8f && g[0] < 1.2f;
-		/* Reflectance A g(A) never decreases with A. */
-		if (a * g[0] < prev - 1e-6f)
-			monotone = 0;
-		prev = a * g[0];
+	static const int32_t cals[] = {SSS_CALIBRATION_CYCLES_RANDOM_WALK,
+	                               SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN,
+	                               SSS_CALIBRATION_CYCLES4_RANDOM_WALK};
+	for (int k = 0; k < 3; k++) {
+		float prev = -1.0f;
+		int monotone = 1, finite = 1, sane = 1;
+		for (int i = 0; i <= 1000; i++) {
+			float a = (float)i / 1000.0f, al[3] = {a, a, a}, g[3];
+			CHECK_STATUS("table-status", SSS_OK,
+			             sss_calibration_gain(cals[k], al, g));
+			finite &= isfinite(g[0]) && g[0] == g[1] && g[1] == g[2];
+			sane &= g[0] > 0.7f && g[0] < 1.2f;
+			/* Reflectance A g(A) never decreases with A. */
+			if (a * g[0] < prev - 1e-6f)
+				monotone = 0;
+			prev = a * g[0];
+		}
+		CHECK("table-finite", finite, "calibration %d: non-finite or "
+		      "channel-dependent gain", cals[k]);
+		CHECK("table-sane", sane, "calibration %d: gain outside (0.7, 1.2)",
+		      cals[k]);
+		CHECK("table-monotone", monotone, "calibration %d: A g(A) "
+		      "decreases somewhere", cals[k]);
 	}
-	CHECK("table-finite", finite, "non-finite or channel-dependent gain");
-	CHECK("table-sane", sane, "gain outside (0.8, 1.2)");
-	CHECK("table-monotone", monotone, "A g(A) decreases somewhere");
+	/* 4.x/5.x: the measured points (section 3 of sss_calibration.c). */
+	float al4[3] = {0.05f, 0.5f, 0.9f}, g4[3];
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, al4, g4);
+	CHECK("table4-skin", fabsf(g4[0] - 0.9036f) < 1e-6f &&
+	      fabsf(g4[1] - 0.9545f) < 1e-6f && fabsf(g4[2] - 0.9916f) < 1e-6f,
+	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, al4, g4);
+	CHECK("table4-rw", fabsf(g4[0] - 0.7686f) < 1e-6f &&
+	      fabsf(g4[1] - 0.8819f) < 1e-6f && fabsf(g4[2] - 0.9763f) < 1e-6f,
+	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
 
 	float al[3] = {0.3f, 0.8f, 1.0f}, g[3];
 	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, al, g);
@@ -76,11 +94,19 @@ static void test_material(void)
 	m.pass_index = 1;
 	CHECK("default-none", m.calibration == SSS_CALIBRATION_NONE, "%d",
 	      m.calibration);
-	m.calibration = 5;
+	m.calibration = 4;
 	CHECK_STATUS("validate-bad", SSS_ERR_INVALID_ARGUMENT,
 	             sss_material_validate(&m, NULL, 0));
-	m.calibration = SSS_CALIBRATION_CYCLES_RANDOM_WALK;
-	CHECK_STATUS("validate-ok", SSS_OK, sss_material_validate(&m, NULL, 0));
+	for (int32_t c = SSS_CALIBRATION_CYCLES_RANDOM_WALK;
+	     c <= SSS_CALIBRATION_CYCLES4_RANDOM_WALK; c++) {
+		m.calibration = c;
+		CHECK_STATUS("validate-ok", SSS_OK,
+		             sss_material_validate(&m, NULL, 0));
+	}
+	m.burley_mapping = 5;
+	CHECK_STATUS("validate-mapping", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&m, NULL, 0));
+	m.burley_mapping = SSS_BURLEY_CYCLES;
 
 	/* The measured mapping: d / r against the slab fits (within 8 %). */
 	static const float a[] = {0.1f, 0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f};
@@ -95,7 +121,24 @@ static void test_material(void)
 		CHECK("mapping-fit", fabs(d[0] / fit[i] - 1.0) < 0.08,
 		      "A %g: d/r %g, measured %g", (double)a[i], d[0], fit[i]);
 	}
+	/* 4.x/5.x's Random Walk: d / r measured, growing with the albedo. */
+	static const float a4[] = {0.05f, 0.3f, 0.6f, 0.8f, 0.9f, 1.0f};
+	static const double fit4[] = {0.0171, 0.0304, 0.0541, 0.0825, 0.100,
+	                              0.1039};
+	m.burley_mapping = SSS_BURLEY_CYCLES4_RANDOM_WALK;
+	for (int i = 0; i < 6; i++) {
+		m.radius[0] = m.radius[1] = m.radius[2] = 2.0f;
+		m.albedo[0] = m.albedo[1] = m.albedo[2] = a4[i];
+		double d[3];
+		CHECK_STATUS("mapping4-status", SSS_OK, sss_burley_d(&m, d));
+		CHECK("mapping4-fit", fabs(d[0] / (2.0 * fit4[i]) - 1.0) < 1e-5,
+		      "A %g: d/r %g, measured %g", (double)a4[i], d[0] / 2.0,
+		      fit4[i]);
+	}
 	m.albedo[2] = 1.5f;
+	CHECK_STATUS("mapping4-albedo", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&m, NULL, 0));
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
 	CHECK_STATUS("mapping-albedo", SSS_ERR_INVALID_ARGUMENT,
 	             sss_material_validate(&m, NULL, 0));
 	m.albedo[2] = 0.5f;

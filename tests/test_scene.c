@@ -326,7 +326,7 @@ static const struct {
 	 "\"burley\", \"mapping\": \"CYCLES\"}]}",
 	 SSS_ERR_INVALID_ARGUMENT, "materials[0].mapping: unknown mapping "
 	 "'CYCLES' (expected cycles, eevee, random-walk, "
-	 "cycles-random-walk)"},
+	 "cycles-random-walk, cycles4-random-walk)"},
 	{"err-texturing", "{\"materials\": [{\"pass_index\": 1, \"profile\": "
 	 "\"none\", \"texturing\": \"pre\"}]}",
 	 SSS_ERR_INVALID_ARGUMENT, "materials[0].texturing: unknown texturing "

@@ -71,6 +71,18 @@ _METHOD_FROM_BLENDER = {} if PRINCIPLED_V2 else {
     "RANDOM_WALK_FIXED_RADIUS": "RANDOM_WALK"}
 _METHOD_TO_BLENDER = {v: k for k, v in _METHOD_FROM_BLENDER.items()}
 
+# Cycles' random walk as libsss measured it (csrc/sss_calibration.c): per
+# method, the radius mapping and the energy calibration (scene.json
+# names). 4.0 rewrote the walk: 3.x's Random Walk is 4.x's Random Walk
+# (Skin), the same widths with less energy; 3.x's Fixed Radius has no
+# measurement.
+WALK_CALIBRATION = {
+    "RANDOM_WALK_SKIN": ("cycles-random-walk", "cycles4-random-walk-skin"),
+    "RANDOM_WALK": ("cycles4-random-walk", "cycles4-random-walk"),
+} if VERSION >= (4, 0, 0) else {
+    "RANDOM_WALK_SKIN": ("cycles-random-walk", "cycles-random-walk"),
+}
+
 
 def principled_input(node, key):
     """The Principled BSDF's input socket for a version-independent key.
@@ -239,6 +251,19 @@ def set_multilayer_exr(settings, depth="32", codec="ZIP"):
     settings.file_format = "OPEN_EXR_MULTILAYER"
     settings.color_depth = depth
     settings.exr_codec = codec
+
+
+# ----------------------------------------------------------------- EEVEE
+
+def plain_eevee(scene, samples):
+    """EEVEE at `samples` without the screen effects Cycles has no
+    counterpart for: bloom (gone in 4.2) and ambient occlusion (gone in
+    5.0)."""
+    e = scene.eevee
+    for name in ("use_bloom", "use_gtao"):
+        if hasattr(e, name):
+            setattr(e, name, False)
+    e.taa_render_samples = samples
 
 
 # ------------------------------------------------------------ compositor

@@ -74,7 +74,13 @@ def _declare(lib):
         "sss_scene_load": (c.c_int32, [c.c_char_p, c.POINTER(c.c_void_p),
                                        c.c_char_p, c.c_size_t, c.c_char_p,
                                        c.c_size_t]),
+        "sss_scene_parse": (c.c_int32, [c.c_char_p, c.c_size_t,
+                                        c.POINTER(c.c_void_p), c.c_char_p,
+                                        c.c_size_t, c.c_char_p, c.c_size_t]),
         "sss_scene_free": (None, [c.c_void_p]),
+        "sss_scene_materials": (c.c_void_p, [c.c_void_p,
+                                             c.POINTER(c.c_int32)]),
+        "sss_burley_d": (c.c_int32, [c.c_void_p, c.POINTER(c.c_double)]),
         "sss_process_options_default": (None,
                                         [c.POINTER(ProcessOptions)]),
         "sss_process_exr": (c.c_int32, [c.c_char_p, c.c_char_p, c.c_void_p,
@@ -131,6 +137,33 @@ def _check(code, detail):
         message = detail.value.decode(errors="replace") or \
             lib.sss_status_string(code).decode()
         raise LibraryError(code, lib.sss_status_name(code).decode(), message)
+
+
+def burley_d(material):
+    """Burley's shape parameter d per channel for one material of a scene
+    description (a dict, docs/scene.md), as the library derives it from
+    the radius, the mapping and the albedo: the library owns the mappings
+    and their measured tables."""
+    import json
+    lib = library()
+    # (any valid pass index: d does not depend on it)
+    text = json.dumps({"version": 1, "materials": [
+        dict(material, pass_index=1)]}).encode()
+    ptr = ctypes.c_void_p()
+    warn = ctypes.create_string_buffer(4096)
+    err = ctypes.create_string_buffer(4096)
+    _check(lib.sss_scene_parse(text, len(text), ctypes.byref(ptr), warn,
+                               len(warn), err, len(err)), err)
+    try:
+        d = (ctypes.c_double * 3)()
+        mats = lib.sss_scene_materials(ptr, None)
+        code = lib.sss_burley_d(mats, d)
+        if code != 0:
+            err.value = b""
+            _check(code, err)
+        return list(d)
+    finally:
+        lib.sss_scene_free(ptr)
 
 
 class Scene:

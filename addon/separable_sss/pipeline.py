@@ -63,6 +63,13 @@ def paths_for(scene, frame):
 
 # ------------------------------------------------------------- description
 
+# The Radius Meaning choices (properties.MAPPINGS) by their scene.json names.
+MAPPING_NAMES = {"CYCLES": "cycles", "EEVEE": "eevee",
+                 "RANDOM_WALK": "random-walk",
+                 "CYCLES_RANDOM_WALK": "cycles-random-walk",
+                 "CYCLES4_RANDOM_WALK": "cycles4-random-walk"}
+
+
 def _material_entry(found):
     s = found.material.sss
     # Principled v2's Subsurface Weight mixes the diffuse and subsurface
@@ -75,29 +82,28 @@ def _material_entry(found):
         entry["taps"] = s.taps
     scale = s.radius_scale
     if s.profile in ("BLENDER", "BURLEY"):
-        mapping = s.mapping
         # Measured (blender_scripts/calibrate.py, csrc/sss_calibration.c):
-        # Cycles' random walk with the radius adapted to the colour (3.x's
-        # Random Walk, 4.x's Random Walk (Skin)) widens like
-        # cycles-random-walk, and returns the diffuse lobe's energy times
-        # g(albedo).
-        walk = s.profile == "BURLEY" or found.method == "RANDOM_WALK_SKIN"
-        if mapping == "AUTO":
-            mapping = "CYCLES_RANDOM_WALK" if walk else \
-                "RANDOM_WALK" if found.method.startswith("RANDOM_WALK") \
-                else "CYCLES"
+        # how Cycles' random walk widens with the colour and what energy it
+        # returns, per method and Blender version. The Burley profile
+        # follows Random Walk (Skin), the walk 3.x has.
+        walk = compat.WALK_CALIBRATION.get(
+            "RANDOM_WALK_SKIN" if s.profile == "BURLEY" else found.method)
+        if s.mapping != "AUTO":
+            mapping = MAPPING_NAMES[s.mapping]
+        elif walk:
+            mapping = walk[0]
+        else:
+            mapping = "random-walk" if found.method.startswith(
+                "RANDOM_WALK") else "cycles"
         radius = found.radius if s.profile == "BLENDER" else tuple(s.radius)
         albedo = (found.albedo or found.color) if s.profile == "BLENDER" \
             else tuple(s.albedo)
         entry.update(profile="burley",
                      radius=[float(r) * scale for r in radius],
-                     mapping={"CYCLES": "cycles", "EEVEE": "eevee",
-                              "RANDOM_WALK": "random-walk",
-                              "CYCLES_RANDOM_WALK": "cycles-random-walk"}
-                     [mapping],
+                     mapping=mapping,
                      albedo=[min(max(float(a), 0.0), 1.0) for a in albedo])
         if s.match_energy and walk:
-            entry["calibration"] = "cycles-random-walk"
+            entry["calibration"] = walk[1]
     elif s.profile == "GAUSSIANS":
         entry.update(profile="gaussians", scale=s.gaussian_scale * scale)
     elif s.profile == "JIMENEZ":

@@ -21,15 +21,20 @@ PROFILES = [
 ]
 
 MAPPINGS = [
-    ("AUTO", "Auto", "Cycles Random Walk for Random Walk materials (and "
-     "the Burley profile), Cycles' Burley otherwise", 0),
+    ("AUTO", "Auto", "What this Blender's Cycles does with the radius for "
+     "Random Walk materials (and the Burley profile), Cycles' Burley "
+     "otherwise", 0),
     ("CYCLES", "Cycles Burley", "d = radius / 4 pi", 1),
     ("EEVEE", "EEVEE", "d = 0.0459 radius", 2),
     ("RANDOM_WALK", "Mean Free Path",
      "The radius is the diffuse mean free path (Christensen-Burley)", 3),
     ("CYCLES_RANDOM_WALK", "Cycles Random Walk",
-     "What Cycles' random walk does with the radius, as measured on slabs: "
-     "its mean free path through Jensen's dipole, then Burley's fit", 4),
+     "What Cycles' random walk (3.x's Random Walk, 4.x's Random Walk "
+     "(Skin)) does with the radius, as measured on slabs: its mean free "
+     "path through Jensen's dipole, then Burley's fit", 4),
+    ("CYCLES4_RANDOM_WALK", "Cycles 4 Random Walk",
+     "What the Random Walk of Cycles 4.x and 5.x does with the radius, as "
+     "measured on slabs (narrower for dark colours)", 5),
 ]
 
 TEXTURING = [

@@ -231,15 +231,16 @@ def rw_mfp_over_radius(a):
     return math.sqrt(3.0 * (1.0 - 0.5 * (lo + hi)))
 
 
-def _mfp(mapping, r, a):
-    """The medium's mean free path (metres) for radius r and albedo a, as
-    the library derives it: Cycles' own for cycles-random-walk, l = d s(A)
-    for the other mappings."""
-    if mapping == "cycles-random-walk":
-        return r * rw_mfp_over_radius(a)
-    d = {"cycles": r / (4 * math.pi), "eevee": r * 0.0459101,
-         "random-walk": r / (3.5 + 100 * (a - 0.33) ** 4)}[mapping]
-    return d * (1.9 - a + 3.5 * (a - 0.8) ** 2)
+def _mfps(entry):
+    """The medium's mean free path (metres) per channel for a material
+    entry, as the library derives it: Cycles' own for cycles-random-walk,
+    l = d s(A) with the library's d for the other mappings."""
+    if entry["mapping"] == "cycles-random-walk":
+        return [r * rw_mfp_over_radius(a)
+                for r, a in zip(entry["radius"], entry["albedo"])]
+    from . import native
+    return [d * (1.9 - a + 3.5 * (a - 0.8) ** 2)
+            for d, a in zip(native.burley_d(entry), entry["albedo"])]
 
 
 def _burley_reach(scene, found):
@@ -248,8 +249,7 @@ def _burley_reach(scene, found):
     from .pipeline import _material_entry
     entry = _material_entry(found)
     reach = 0.0
-    for r, a in zip(entry["radius"], entry["albedo"]):
-        mfp = _mfp(entry["mapping"], r, a)
+    for mfp, a in zip(_mfps(entry), entry["albedo"]):
         if mfp > 0.0:
             reach = max(reach, slab_reach(mfp, a))
     return reach
@@ -441,8 +441,8 @@ def _slab_params(scene, found):
     unit = scene.unit_settings.scale_length or 1.0
     length = scene.sss.radius_scale / unit
     out = ([], [], [])
-    for r, alb in zip(entry["radius"], entry["albedo"]):
-        mfp = _mfp(entry["mapping"], r, alb) * length
+    for mfp, alb in zip(_mfps(entry), entry["albedo"]):
+        mfp *= length
         if not mfp > 0.0:
             return None
         alpha = _rw_alpha(alb)

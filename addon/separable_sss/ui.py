@@ -76,7 +76,7 @@ def draw_material_settings(layout, context, mat, split=True):
         _prop(col, s, "mapping", split)
         sub = col.column()
         sub.active = s.mapping in {'RANDOM_WALK', 'CYCLES_RANDOM_WALK',
-                                   'AUTO'}
+                                   'CYCLES4_RANDOM_WALK', 'AUTO'}
         sub.prop(s, "albedo")
     elif s.profile == 'GAUSSIANS':
         col.prop(s, "gaussian_scale")

@@ -81,6 +81,18 @@ def test_compare_quick(tmp_path):
     # EEVEE ran (under xvfb-run) or says why not.
     assert any(r["renderer"] == "eevee" for r in rows) or "EEVEE" in md
 
+    # OIDN rows: the random walk, SSS off and the default method, each
+    # denoised at every sample count (less noise: less error at 16 spp),
+    # or the reason there are none.
+    denoised = {(r["method"], int(r["samples"])): r for r in rows
+                if r["method"].endswith("+oidn")}
+    if "OIDN rows skipped" not in md:
+        assert set(denoised) == {(m + "+oidn", n) for n in (16, 64) for m in
+                                 ("random-walk", "no-sss", "separable")}
+        assert float(denoised["random-walk+oidn", 16]["rmse"]) < \
+            float(rw[0]["rmse"])
+        assert "with OIDN on both" in md
+
 
 
 def test_sweep_radius(tmp_path):

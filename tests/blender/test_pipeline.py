@@ -194,6 +194,35 @@ def test_switched_off_render_keeps_the_look(blends, tmp_path):
                            atol=2e-3)
 
 
+# What the description asks for, per method: the radius mapping and the
+# energy calibration measured for this Blender's random walk
+# (csrc/sss_calibration.c); 4.0 rewrote the walk.
+WALK = {"BURLEY": ("cycles", None),
+        "RANDOM_WALK": ("cycles4-random-walk", "cycles4-random-walk"),
+        "RANDOM_WALK_SKIN": ("cycles-random-walk",
+                             "cycles4-random-walk-skin")} \
+    if bpy.app.version >= (4, 0, 0) else {
+        "BURLEY": ("cycles", None), "RANDOM_WALK": ("random-walk", None),
+        "RANDOM_WALK_SKIN": ("cycles-random-walk", "cycles-random-walk")}
+
+
+@pytest.mark.parametrize("method", sorted(WALK))
+def test_description_follows_the_method(blends, tmp_path, method):
+    scene = open_scene(blends["two"], tmp_path)
+    node = bpy.data.materials["Skin"].node_tree.nodes["Principled BSDF"]
+    compat.set_method(node, method)
+    path = str(tmp_path / "scene.json")
+    found = pipeline.analyse(scene)
+    with pipeline.switched_off(scene, found, backlight=False):
+        pipeline.write_description(scene, found, path)
+    skin = [m for m in json.load(open(path))["materials"]
+            if m["name"] == "Skin"][0]
+    assert (skin["mapping"], skin.get("calibration")) == WALK[method]
+    from separable_sss import native
+    with native.Scene(path) as loaded:      # and the library takes it
+        assert loaded.warnings == []
+
+
 def test_no_scattering_material(blends, tmp_path):
     scene = open_scene(blends["none"], tmp_path)
     assert pipeline.analyse(scene).found == []
