@@ -381,7 +381,7 @@ def _eevee_index_aovs(scene, found, undo):
         undo.add(lambda name=name: _remove_aov(layer, name))
         tree = f.material.node_tree
         node = tree.nodes.new("ShaderNodeOutputAOV")
-        node.name = name  # in 3.4 the node's name is the AOV it writes
+        compat.set_aov_output(node, name)
         node.label = "SSS compare"
         node.inputs["Value"].default_value = 1.0
         undo.add(lambda tree=tree, node=node: tree.nodes.remove(node))

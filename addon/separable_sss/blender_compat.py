@@ -266,6 +266,15 @@ def plain_eevee(scene, samples):
     e.taa_render_samples = samples
 
 
+def set_aov_output(node, name):
+    """Points an AOV Output shader node at the view layer AOV `name`
+    (3.4: the node's name; later: its aov_name)."""
+    if hasattr(node, "aov_name"):
+        node.aov_name = name
+    else:
+        node.name = name
+
+
 # ------------------------------------------------------------ compositor
 
 def compositor_tree(scene, create=False):
