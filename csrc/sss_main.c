@@ -4,6 +4,7 @@
 #define _GNU_SOURCE /* getopt_long */
 #include "sss.h"
 
+#include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
 #include <signal.h>
@@ -45,7 +46,8 @@ static const char usage_text[] =
 "                          rle, pxr24, b44, b44a, none (lossless: zip, zips,\n"
 "                          piz, rle, none)\n"
 "  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
-"      --max-size WxH      refuse inputs larger than this (default 32768x32768)\n"
+"      --max-size WxH      refuse inputs larger than this, each 1..1048576\n"
+"                          (default 32768x32768 and 2^28 pixels in all)\n"
 "      --resume            skip frames whose output exists (outputs appear\n"
 "                          only when complete, so a killed run resumes)\n"
 "  -q, --quiet             print errors only\n"
@@ -69,6 +71,7 @@ typedef struct args {
 	int threads;         /* -1 = the scene's */
 	int samples;         /* -1 = the scene's */
 	int max_w, max_h;
+	long long max_pixels; /* 0: the library's default */
 	int quiet;
 	int resume;
 } args;
@@ -96,57 +99,134 @@ static const char *const method_names[] = {"separable", "separable-exact",
 static const char *const compression_names[] = {"none", "rle", "zips", "zip",
                                                 "piz", "pxr24", "b44", "b44a"};
 
+/* ------------------------------------------------------------ numbers */
+
+/* The whole of text as a decimal integer in [lo, hi]: no leading blanks,
+ * nothing after the digits, range checked before any narrowing (strtoll
+ * saturates out-of-range text, which is then refused too). */
+static int parse_int(const char *text, long long lo, long long hi,
+                     long long *out)
+{
+	char *end;
+	if (!text || !*text || isspace((unsigned char)*text))
+		return -1;
+	errno = 0;
+	long long v = strtoll(text, &end, 10);
+	if (end == text || *end || errno || v < lo || v > hi)
+		return -1;
+	*out = v;
+	return 0;
+}
+
+/* "WIDTHxHEIGHT", each 1..2^20, nothing else. */
+static int parse_size(const char *text, int *w, int *h)
+{
+	char width[16];
+	const char *x = strchr(text, 'x');
+	long long a, b;
+	if (!x || (size_t)(x - text) >= sizeof width)
+		return -1;
+	memcpy(width, text, (size_t)(x - text));
+	width[x - text] = '\0';
+	if (parse_int(width, 1, 1 << 20, &a) || parse_int(x + 1, 1, 1 << 20, &b))
+		return -1;
+	*w = (int)a;
+	*h = (int)b;
+	return 0;
+}
+
+/* Digits at *p (no sign) as a number up to limit, which *p moves past;
+ * -1 when there are none, 1 when the number passes the limit. */
+static int scan_uint(const char **p, long long limit, long long *out)
+{
+	const char *q = *p;
+	long long v = 0;
+	if (!isdigit((unsigned char)*q))
+		return -1;
+	for (; isdigit((unsigned char)*q); q++) {
+		if (v > (limit - (*q - '0')) / 10)
+			return 1;
+		v = v * 10 + (*q - '0');
+	}
+	*p = q;
+	*out = v;
+	return 0;
+}
+
 /* ------------------------------------------------------------ frames */
+
+#define MAX_FRAME 99999999LL
+#define MAX_FRAMES 1000000LL
 
 typedef struct frame_list {
 	int *frames;
 	int count;
 } frame_list;
 
-/* "1-240", "1-240x2", "7,9,12-20" -> frames in order. */
-static int parse_frames(const char *text, frame_list *out)
+/* "1-240", "1-240x2", "7,9,12-20" -> frames in order; NULL, or what is
+ * wrong (then out holds nothing). */
+static const char *parse_frames(const char *text, frame_list *out)
 {
-	int cap = 0;
+	static const char *const form = "like 1-240, 1-240x2, 7,9,12-20";
+	const char *why = NULL;
+	long long cap = 0;
 	out->frames = NULL;
 	out->count = 0;
 	const char *p = text;
-	while (*p) {
-		char *end;
-		errno = 0;
-		long a = strtol(p, &end, 10), b = a, step = 1;
-		if (end == p || errno)
-			return -1;
-		p = end;
-		if (*p == '-') {
-			b = strtol(p + 1, &end, 10);
-			if (end == p + 1 || errno)
-				return -1;
-			p = end;
-			if (*p == 'x') {
-				step = strtol(p + 1, &end, 10);
-				if (end == p + 1 || step < 1)
-					return -1;
-				p = end;
-			}
-		}
-		if (a < 0 || b < a || b > 99999999 || (b - a) / step > 1000000)
-			return -1;
-		for (long f = a; f <= b; f += step) {
-			if (out->count == cap) {
-				cap = cap ? 2 * cap : 64;
-				int *grown = realloc(out->frames, cap * sizeof *grown);
-				if (!grown)
-					return -1;
-				out->frames = grown;
-			}
-			out->frames[out->count++] = (int)f;
-		}
-		if (*p == ',')
+	while (*p && !why) {
+		long long a, b, step = 1;
+		int r = scan_uint(&p, MAX_FRAME, &a);
+		b = a;
+		if (!r && *p == '-') {
 			p++;
-		else if (*p)
-			return -1;
+			r = scan_uint(&p, MAX_FRAME, &b);
+			if (!r && *p == 'x') {
+				p++;
+				r = scan_uint(&p, MAX_FRAME, &step);
+				if (!r && step < 1)
+					why = "the step must be at least 1";
+			}
+		}
+		if (r > 0)
+			why = "frame numbers and steps must be 0..99999999";
+		else if (r < 0)
+			why = form;
+		else if (!why && b < a)
+			why = "a range must not run backwards";
+		else if (!why && *p && *p != ',')
+			why = form;
+		if (why)
+			break;
+		long long n = (b - a) / step + 1; /* all <= MAX_FRAME: no overflow */
+		if (n > MAX_FRAMES - out->count) {
+			why = "at most 1000000 frames";
+			break;
+		}
+		if (out->count + n > cap) {
+			long long want = cap ? cap : 64;
+			while (want < out->count + n)
+				want *= 2;
+			int *grown = realloc(out->frames, (size_t)want * sizeof *grown);
+			if (!grown) {
+				why = "out of memory";
+				break;
+			}
+			out->frames = grown;
+			cap = want;
+		}
+		for (long long i = 0; i < n; i++)
+			out->frames[out->count++] = (int)(a + i * step);
+		if (*p == ',' && !*++p)
+			why = form; /* a trailing comma */
 	}
-	return out->count > 0 ? 0 : -1;
+	if (!why && out->count == 0)
+		why = form;
+	if (why) {
+		free(out->frames);
+		out->frames = NULL;
+		out->count = 0;
+	}
+	return why;
 }
 
 /* Replaces the run of '#' in pattern with the zero-padded frame number. */
@@ -212,7 +292,7 @@ static void progress_bar(int done, int total, int failed)
 int main(int argc, char **argv)
 {
 	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, -1, 32768, 32768,
-	          0, 0};
+	          0, 0, 0};
 	static const struct option longopts[] = {
 		{"output", required_argument, NULL, 'o'},
 		{"scene", required_argument, NULL, 's'},
@@ -232,6 +312,7 @@ int main(int argc, char **argv)
 	};
 	int c;
 	char *end;
+	long long n;
 	while ((c = getopt_long(argc, argv, "o:s:f:m:r:l:c:t:qhV", longopts,
 	                        NULL)) != -1) {
 		switch (c) {
@@ -261,30 +342,27 @@ int main(int argc, char **argv)
 		case 'r':
 			errno = 0;
 			a.radius_scale = strtod(optarg, &end);
-			if (*end || end == optarg || errno || !(a.radius_scale >= 0) ||
+			if (*end || end == optarg || errno ||
+			    isspace((unsigned char)*optarg) || !(a.radius_scale >= 0) ||
 			    a.radius_scale > 1e30)
 				return usage_error("--radius-scale '%s' must be a number "
 				                   ">= 0", optarg);
 			break;
 		case 't':
-			errno = 0;
-			a.threads = (int)strtol(optarg, &end, 10);
-			if (*end || end == optarg || errno || a.threads < 0 ||
-			    a.threads > 256)
+			if (parse_int(optarg, 0, 256, &n))
 				return usage_error("--threads '%s' must be 0..256", optarg);
+			a.threads = (int)n;
 			break;
 		case 'N':
-			errno = 0;
-			a.samples = (int)strtol(optarg, &end, 10);
-			if (*end || end == optarg || errno || a.samples < 1 ||
-			    a.samples > 4096)
+			if (parse_int(optarg, 1, 4096, &n))
 				return usage_error("--samples '%s' must be 1..4096", optarg);
+			a.samples = (int)n;
 			break;
 		case 'S':
-			if (sscanf(optarg, "%dx%d", &a.max_w, &a.max_h) != 2 ||
-			    a.max_w < 1 || a.max_h < 1)
-				return usage_error("--max-size '%s' must be WIDTHxHEIGHT",
-				                   optarg);
+			if (parse_size(optarg, &a.max_w, &a.max_h))
+				return usage_error("--max-size '%s' must be WIDTHxHEIGHT, "
+				                   "each 1..1048576", optarg);
+			a.max_pixels = (long long)a.max_w * a.max_h;
 			break;
 		default:
 			fprintf(stderr, "Try 'sss --help'.\n");
@@ -315,9 +393,12 @@ int main(int argc, char **argv)
 	frame_list frames = {NULL, 0};
 	int single = 0;
 	if (a.frames) {
-		if (parse_frames(a.frames, &frames))
-			return usage_error("bad --frames '%s' (like 1-240, 1-240x2, "
-			                   "7,9,12-20)", a.frames);
+		const char *why = parse_frames(a.frames, &frames);
+		if (why) {
+			fprintf(stderr, "sss: bad --frames '%s': %s\nTry 'sss --help'."
+			        "\n", a.frames, why);
+			return 2;
+		}
 	} else {
 		frames.frames = &single;
 		frames.count = 1;
@@ -348,6 +429,8 @@ int main(int argc, char **argv)
 	po.radius_scale = (float)a.radius_scale;
 	po.exr.max_width = a.max_w;
 	po.exr.max_height = a.max_h;
+	if (a.max_pixels)
+		po.exr.max_pixels = a.max_pixels;
 	if (a.compression >= 0)
 		po.exr.compression = a.compression;
 	sss_timings total = {0, 0, 0};

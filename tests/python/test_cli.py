@@ -201,6 +201,63 @@ def test_usage(sss_cmd, tmp_path):
         "--method", "magic", check=2)
 
 
+# Every number is the whole argument, range checked before it is narrowed:
+# no wrap-around (2^32 + 1 threads was 1), no trailing text, and --frames
+# names the limit it hits (a huge step overflowed and leaked).
+@pytest.mark.parametrize("option,value,needle", [
+    ("--threads", "4294967297", "must be 0..256"),
+    ("--threads", "4294967296", "must be 0..256"),
+    ("--threads", " 4", "must be 0..256"),
+    ("--threads", "4x", "must be 0..256"),
+    ("--threads", "", "must be 0..256"),
+    ("--samples", "4294967297", "must be 1..4096"),
+    ("--samples", "0x10", "must be 1..4096"),
+    ("--radius-scale", " 1", "must be a number"),
+    ("--max-size", "100x100junk", "each 1..1048576"),
+    ("--max-size", "100x", "each 1..1048576"),
+    ("--max-size", "x100", "each 1..1048576"),
+    ("--max-size", "-5x10", "each 1..1048576"),
+    ("--max-size", "2000000x10", "each 1..1048576"),
+    ("--max-size", "4294967297x4294967297", "each 1..1048576"),
+    ("--frames", "1-10x9223372036854775807", "0..99999999"),
+    ("--frames", "1-99999999999", "0..99999999"),
+    ("--frames", "1-2000000", "at most 1000000 frames"),
+    ("--frames", "1-600000,1-600000", "at most 1000000 frames"),
+    ("--frames", "5-1", "must not run backwards"),
+    ("--frames", "1-3x0", "step must be at least 1"),
+    ("--frames", "1,2,", "like 1-240"),
+    ("--frames", "-3", "like 1-240"),
+])
+def test_strict_numbers(sss_cmd, blender_render, tmp_path, option, value,
+                        needle):
+    scene = str(blender_render / "scene.json")
+    pattern = option == "--frames"
+    proc = run(sss_cmd, str(tmp_path / ("in_####.exr" if pattern else
+                                        "in.exr")),
+               "-o", str(tmp_path / ("out_####.exr" if pattern else
+                                     "out.exr")),
+               "--scene", scene, option, value, check=2)
+    assert needle in proc.stderr and value in proc.stderr, proc.stderr
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("option,value", [
+    ("--threads", "0"), ("--threads", "256"), ("--samples", "4096"),
+    ("--max-size", "1048576x1048576"), ("--frames", "0-99999999x99999999"),
+    ("--frames", "7,9,12-20x4")])
+def test_numbers_at_their_limits(sss_cmd, blender_render, tmp_path, option,
+                                 value):
+    """Accepted: the run goes on to the (missing) input, exit status 1."""
+    pattern = option == "--frames"
+    proc = run(sss_cmd, str(tmp_path / ("in_####.exr" if pattern else
+                                        "in.exr")),
+               "-o", str(tmp_path / "out_####.exr" if pattern else
+                         tmp_path / "out.exr"),
+               "--scene", str(blender_render / "scene.json"), option, value,
+               check=1)
+    assert "cannot open" in proc.stderr, proc.stderr
+
+
 def test_resume_after_a_killed_run(sss_cmd, blender_render, tmp_path):
     """Killed mid-sequence: only complete frames exist (outputs appear by
     rename), and --resume does the rest without redoing them."""
