@@ -9,6 +9,10 @@ import sys
 import numpy as np
 import OpenImageIO as oiio
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                "..", "blender_scripts"))
+from exr_io import read_exr_parts  # noqa: E402  (5.0 names, every part)
+
 
 def srgb(linear):
     x = np.clip(linear, 0.0, 1.0)
@@ -18,23 +22,23 @@ def srgb(linear):
 
 def main():
     src, dst = sys.argv[1], sys.argv[2]
-    inp = oiio.ImageInput.open(src)
-    if not inp:
-        sys.exit(f"side_by_side: {src}: {oiio.geterror()}")
-    spec = inp.spec()
-    pixels = inp.read_image(oiio.FLOAT)
-    inp.close()
-    names = list(spec.channelnames)
+    try:
+        channels, spec = read_exr_parts(src)
+    except RuntimeError as e:
+        sys.exit(f"side_by_side: {e}")
+    names = list(channels)
     # The render's own layer: not our SSS output, and not the back-light
     # layer the add-on renders for transmission (SSSBackLight).
     layer = sys.argv[3] if len(sys.argv) > 3 else next(
-        n.split(".")[0] for n in names
-        if n.endswith(".DiffDir.R") and n.split(".")[0] not in
-        ("SSS", "SSSBackLight"))
+        (n.split(".")[0] for n in names
+         if n.endswith(".DiffDir.R") and n.split(".")[0] not in
+         ("SSS", "SSSBackLight")), None)
+    if layer is None or "SSS.Combined.R" not in channels:
+        sys.exit(f"side_by_side: {src}: needs a view layer's passes and "
+                 "the SSS layer (the output of the add-on or of sss)")
 
     def rgb(prefix):
-        return np.stack([pixels[:, :, names.index(f"{prefix}.{c}")]
-                         for c in "RGB"], axis=-1)
+        return np.stack([channels[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
 
     before, after = rgb(f"{layer}.Combined"), rgb("SSS.Combined")
     gap = np.ones((spec.height, 8, 3), np.float32)
