@@ -155,6 +155,17 @@ static const float cal_gain[][CAL_N] = {
 		0.9036f, 0.8946f},
 };
 
+/* The interval [cal_albedo[i - 1], cal_albedo[i]] holding a (searched from
+ * i = first; a in (cal_albedo[first - 1], 1)) and a's place t in it. */
+static int interval(float a, int first, float *t)
+{
+	int i = first;
+	while (i < CAL_N - 1 && cal_albedo[i] < a)
+		i++;
+	*t = (a - cal_albedo[i - 1]) / (cal_albedo[i] - cal_albedo[i - 1]);
+	return i;
+}
+
 /* Piecewise linear in cal_albedo, clamped at both ends; 1 for NaN. */
 static float lerp_table(const float *table, float a)
 {
@@ -164,10 +175,8 @@ static float lerp_table(const float *table, float a)
 		return table[0];
 	if (a >= 1.0f)
 		return table[CAL_N - 1];
-	int i = 1;
-	while (i < CAL_N - 1 && cal_albedo[i] < a)
-		i++;
-	float t = (a - cal_albedo[i - 1]) / (cal_albedo[i] - cal_albedo[i - 1]);
+	float t;
+	int i = interval(a, 1, &t);
 	return table[i - 1] + t * (table[i] - table[i - 1]);
 }
 
@@ -183,13 +192,10 @@ static float gain_at(const float *table, float a)
 		return table[1];
 	if (a >= 1.0f)
 		return table[CAL_N - 1];
-	int i = 2;
-	while (i < CAL_N - 1 && cal_albedo[i] < a)
-		i++;
-	float a0 = cal_albedo[i - 1], a1 = cal_albedo[i];
-	float t = (a - a0) / (a1 - a0);
-	float r = a0 * table[i - 1] + t * (a1 * table[i] - a0 * table[i - 1]);
-	return r / a;
+	float t;
+	int i = interval(a, 2, &t);
+	float r0 = cal_albedo[i - 1] * table[i - 1], r1 = cal_albedo[i] * table[i];
+	return (r0 + t * (r1 - r0)) / a;
 }
 
 static int is_calibration(int32_t calibration)

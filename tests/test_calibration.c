@@ -87,6 +87,24 @@ static void test_table(void)
 	             sss_calibration_gain(SSS_CALIBRATION_NONE, NULL, g));
 }
 
+/* d / radius of m with `mapping` at each albedo a[i] against fit[i],
+ * within the relative tolerance tol. */
+static void check_mapping(sss_material *m, int32_t mapping, float radius,
+                          const float *a, const double *fit, int n,
+                          double tol)
+{
+	m->burley_mapping = mapping;
+	for (int i = 0; i < n; i++) {
+		m->radius[0] = m->radius[1] = m->radius[2] = radius;
+		m->albedo[0] = m->albedo[1] = m->albedo[2] = a[i];
+		double d[3];
+		CHECK_STATUS("mapping-status", SSS_OK, sss_burley_d(m, d));
+		CHECK("mapping-fit", fabs(d[0] / (radius * fit[i]) - 1.0) < tol,
+		      "mapping %d, A %g: d/r %g, measured %g", (int)mapping,
+		      (double)a[i], d[0] / radius, fit[i]);
+	}
+}
+
 static void test_material(void)
 {
 	sss_material m;
@@ -112,29 +130,14 @@ static void test_material(void)
 	static const float a[] = {0.1f, 0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f};
 	static const double fit[] = {0.316, 0.210, 0.145, 0.098, 0.067, 0.034,
 	                             0.034};
-	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
-	for (int i = 0; i < 7; i++) {
-		m.radius[0] = m.radius[1] = m.radius[2] = 1.0f;
-		m.albedo[0] = m.albedo[1] = m.albedo[2] = a[i];
-		double d[3];
-		CHECK_STATUS("mapping-status", SSS_OK, sss_burley_d(&m, d));
-		CHECK("mapping-fit", fabs(d[0] / fit[i] - 1.0) < 0.08,
-		      "A %g: d/r %g, measured %g", (double)a[i], d[0], fit[i]);
-	}
-	/* 4.x/5.x's Random Walk: d / r measured, growing with the albedo. */
+	check_mapping(&m, SSS_BURLEY_CYCLES_RANDOM_WALK, 1.0f, a, fit, 7, 0.08);
+	/* 4.x/5.x's Random Walk: d / r measured, growing with the albedo (the
+	 * table itself, at another radius). */
 	static const float a4[] = {0.05f, 0.3f, 0.6f, 0.8f, 0.9f, 1.0f};
 	static const double fit4[] = {0.0171, 0.0304, 0.0541, 0.0825, 0.100,
 	                              0.1039};
-	m.burley_mapping = SSS_BURLEY_CYCLES4_RANDOM_WALK;
-	for (int i = 0; i < 6; i++) {
-		m.radius[0] = m.radius[1] = m.radius[2] = 2.0f;
-		m.albedo[0] = m.albedo[1] = m.albedo[2] = a4[i];
-		double d[3];
-		CHECK_STATUS("mapping4-status", SSS_OK, sss_burley_d(&m, d));
-		CHECK("mapping4-fit", fabs(d[0] / (2.0 * fit4[i]) - 1.0) < 1e-5,
-		      "A %g: d/r %g, measured %g", (double)a4[i], d[0] / 2.0,
-		      fit4[i]);
-	}
+	check_mapping(&m, SSS_BURLEY_CYCLES4_RANDOM_WALK, 2.0f, a4, fit4, 6,
+	              1e-5);
 	m.albedo[2] = 1.5f;
 	CHECK_STATUS("mapping4-albedo", SSS_ERR_INVALID_ARGUMENT,
 	             sss_material_validate(&m, NULL, 0));

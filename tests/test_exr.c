@@ -532,6 +532,23 @@ static void fill_channel(tchan *t, int w, int h)
 	}
 }
 
+/* f: n channels named names, all of one pixel type, w x h, codec comp,
+ * each filled by fill_channel. */
+static void tfile_named(tfile *f, const char *const *names, int n, int w,
+                        int h, exr_compression_t comp, exr_pixel_type_t type)
+{
+	memset(f, 0, sizeof *f);
+	f->w = w;
+	f->h = h;
+	f->comp = comp;
+	f->nchan = n;
+	for (int i = 0; i < n; i++) {
+		f->ch[i].name = names[i];
+		f->ch[i].type = type;
+		fill_channel(&f->ch[i], w, h);
+	}
+}
+
 static void make_blender(tfile *f, int w, int h, exr_compression_t comp)
 {
 	memset(f, 0, sizeof *f);
@@ -1022,17 +1039,9 @@ static void test_blender5_pass_names(int multipart)
 		"Zlayer.DiffCol.R", "Zlayer.DiffCol.G", "Zlayer.DiffCol.B",
 		"Zlayer.Depth.Z", "Zlayer.IndexMA.X"};
 	tfile f;
-	memset(&f, 0, sizeof f);
-	f.w = 6;
-	f.h = 5;
-	f.comp = EXR_COMPRESSION_ZIP;
+	tfile_named(&f, names, (int)(sizeof names / sizeof *names), 6, 5,
+	            EXR_COMPRESSION_ZIP, EXR_PIXEL_FLOAT);
 	f.multipart = multipart;
-	f.nchan = (int)(sizeof names / sizeof *names);
-	for (int i = 0; i < f.nchan; i++) {
-		f.ch[i].name = names[i];
-		f.ch[i].type = EXR_PIXEL_FLOAT;
-		fill_channel(&f.ch[i], f.w, f.h);
-	}
 	char in[256];
 	tpath(in, sizeof in, "blender5.exr");
 	char out[256];
@@ -1573,16 +1582,8 @@ static void test_missing_passes(void)
 	                              "ViewLayer.DiffCol.B",
 	                              "ViewLayer.Depth.Z"};
 	tfile f;
-	memset(&f, 0, sizeof f);
-	f.w = 4;
-	f.h = 3;
-	f.comp = EXR_COMPRESSION_ZIP;
-	f.nchan = (int)(sizeof names / sizeof *names);
-	for (int i = 0; i < f.nchan; i++) {
-		f.ch[i].name = names[i];
-		f.ch[i].type = EXR_PIXEL_HALF;
-		fill_channel(&f.ch[i], f.w, f.h);
-	}
+	tfile_named(&f, names, (int)(sizeof names / sizeof *names), 4, 3,
+	            EXR_COMPRESSION_ZIP, EXR_PIXEL_HALF);
 	char p[256];
 	tpath(p, sizeof p, "nodiffdir.exr");
 	CHECK("exr.missing.write", write_test_exr(p, &f) == 0, "raw write");
@@ -1616,16 +1617,8 @@ static void test_missing_passes(void)
 	static const char *odd[] = {"L.DiffDir.X", "L.DiffDir.Y", "L.DiffDir.Z",
 	                            "L.DiffCol.R", "L.DiffCol.G", "L.DiffCol.B",
 	                            "L.Depth.Z", "L.IndexMA.X"};
-	memset(&f, 0, sizeof f);
-	f.w = 2;
-	f.h = 2;
-	f.comp = EXR_COMPRESSION_NONE;
-	f.nchan = (int)(sizeof odd / sizeof *odd);
-	for (int i = 0; i < f.nchan; i++) {
-		f.ch[i].name = odd[i];
-		f.ch[i].type = EXR_PIXEL_FLOAT;
-		fill_channel(&f.ch[i], f.w, f.h);
-	}
+	tfile_named(&f, odd, (int)(sizeof odd / sizeof *odd), 2, 2,
+	            EXR_COMPRESSION_NONE, EXR_PIXEL_FLOAT);
 	tpath(p, sizeof p, "xyzdiff.exr");
 	CHECK("exr.components.write", write_test_exr(p, &f) == 0, "raw write");
 	exr = NULL;
