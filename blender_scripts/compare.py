@@ -438,20 +438,14 @@ DENOISED = "+oidn"   # method suffix of a denoised row
 
 
 def denoise_jobs(bench):
-    """(source row, EXR, layer of its image) for each image an artist
-    would denoise: the random walk's (not the reference), SSS off and the
-    default method, at every sample count."""
-    jobs = []
-    for r in bench.rows:
-        if r["renderer"] != "cycles" or "path" not in r:
-            continue
-        if r["method"] == "random-walk":
-            jobs.append((r, r["path"], "ViewLayer"))
-        elif r["method"] == "no-sss":
-            jobs.append((r, r["path"], "ViewLayer"))
-        elif r["method"] == bench.default_method:
-            jobs.append((r, r["path"], "SSS"))
-    return jobs
+    """(source row, EXR, whether its image is our SSS layer) for each
+    image an artist would denoise: the random walk's (not the reference),
+    SSS off and the default method, at every sample count."""
+    ours = {"random-walk": False, "no-sss": False,
+            bench.default_method: True}
+    return [(r, r["path"], ours[r["method"]]) for r in bench.rows
+            if r["renderer"] == "cycles" and "path" in r and
+            r["method"] in ours]
 
 
 def denoise_rows(bench, args):
@@ -464,6 +458,7 @@ def denoise_rows(bench, args):
     if not jobs:
         return
     scene = open_scene(args, "CYCLES")
+    layer = bpy.context.view_layer.name     # the render's passes
     tree = compat.compositor_tree(scene, create=True)
     for node in list(tree.nodes):
         tree.nodes.remove(node)
@@ -473,10 +468,11 @@ def denoise_rows(bench, args):
     denoise = tree.nodes.new("CompositorNodeDenoise")
     tree.links.new(denoise.outputs[0], out)
     scene.render.use_compositing = True
-    for row, path, layer in jobs:
+    for row, path, is_ours in jobs:
         image = bpy.data.images.load(path, check_existing=False)
         image_node.image = aux_node.image = image
-        image_node.layer, aux_node.layer = layer, "ViewLayer"
+        image_node.layer = "SSS" if is_ours else layer
+        aux_node.layer = layer
         tree.links.new(image_node.outputs["Combined"],
                        denoise.inputs["Image"])
         tree.links.new(aux_node.outputs["Denoising Normal"],

@@ -95,8 +95,8 @@ def build_scene(size, samples):
     sun.rotation_euler = (0.9, 0.3, 2.4)
 
     world = scene.world
-    compat.ensure_nodes(world).nodes["Background"].inputs["Color"].default_value = (
-        0.05, 0.08, 0.12, 1.0)
+    background = compat.ensure_nodes(world).nodes["Background"]
+    background.inputs["Color"].default_value = (0.05, 0.08, 0.12, 1.0)
 
     render = scene.render
     render.engine = "CYCLES"

@@ -11,12 +11,14 @@ add-on's, so scripts and tests can import it on its own.
   that way (Scale = old Subsurface, Weight 1, Base Color = the old mix).
 - Subsurface methods. 3.x's Random Walk (radius adapted to the colour) is
   4.x's Random Walk (Skin); 3.x's Random Walk (Fixed Radius) is 4.x's
-  Random Walk. The add-on speaks 4.x's names (METHODS).
+  Random Walk. The add-on speaks 4.x's names (METHODS). 4.0 also rewrote
+  the walk itself: libsss's measured tables differ (WALK_CALIBRATION).
 - The compositor. Up to 4.x it is scene.node_tree with a Composite node;
   in 5.0 it is a node group (scene.compositing_node_group) whose Group
   Output is the composite.
 - Node group sockets: tree.inputs/outputs in 3.x, tree.interface from 4.0.
-- EEVEE's engine name: BLENDER_EEVEE_NEXT in 4.2 to 4.5.
+- EEVEE's engine name: BLENDER_EEVEE_NEXT in 4.2 to 4.5; its settings
+  (plain_eevee) and AOV outputs (set_aov_output).
 - Material.use_nodes and Scene.use_nodes are going away (5.0 warns).
 - Image formats: 5.0 chooses a multilayer EXR by media type
   (MULTI_LAYER_IMAGE) before the file format.
@@ -30,6 +32,7 @@ VERSION = tuple(bpy.app.version)
 PRINCIPLED_V2 = VERSION >= (4, 0, 0)
 COMPOSITOR_IS_GROUP = VERSION >= (5, 0, 0)
 NODES_ALWAYS = VERSION >= (5, 0, 0)   # use_nodes is deprecated
+CYCLES_WALK_V2 = VERSION >= (4, 0, 0)  # Cycles' random walk rewritten
 EXTENSIONS = VERSION >= (4, 2, 0)     # blender_manifest.toml, wheels
 EEVEE = "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= VERSION < (5, 0, 0) \
     else "BLENDER_EEVEE"
@@ -79,7 +82,7 @@ _METHOD_TO_BLENDER = {v: k for k, v in _METHOD_FROM_BLENDER.items()}
 WALK_CALIBRATION = {
     "RANDOM_WALK_SKIN": ("cycles-random-walk", "cycles4-random-walk-skin"),
     "RANDOM_WALK": ("cycles4-random-walk", "cycles4-random-walk"),
-} if VERSION >= (4, 0, 0) else {
+} if CYCLES_WALK_V2 else {
     "RANDOM_WALK_SKIN": ("cycles-random-walk", "cycles-random-walk"),
 }
 

@@ -61,7 +61,8 @@ def _ensure_group_tree():
         return tree
     tree = bpy.data.node_groups.new(GROUP_NAME, "CompositorNodeTree")
     compat.new_group_socket(tree, 'INPUT', "NodeSocketColor", "Image")
-    exposure = compat.new_group_socket(tree, 'INPUT', "NodeSocketFloat", "Exposure")
+    exposure = compat.new_group_socket(tree, 'INPUT', "NodeSocketFloat",
+                                       "Exposure")
     exposure.default_value = 0.0
     exposure.min_value = -10.0
     exposure.max_value = 10.0
