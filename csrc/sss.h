@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 4
+#define SSS_ABI_VERSION 5
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -137,6 +137,8 @@ typedef struct sss_passes {
  * which is t^2 for a slab of thickness t < D), or SSSThickness (scene
  * units), and SSSFacing (N . V). */
 #define SSS_BACKLIGHT_LAYER "SSSBackLight"
+/* The layer sss_process_exr adds: Combined (RGBA) and DiffLight (RGB). */
+#define SSS_RESULT_LAYER "SSS"
 #define SSS_THICKNESS_SQ_PASS "SSSThicknessSq"
 #define SSS_THICKNESS_PASS "SSSThickness"
 #define SSS_FACING_PASS "SSSFacing"
@@ -431,6 +433,12 @@ typedef struct sss_exr_options {
 	                         DWAA/DWAB are not available with OpenEXR 3.1 */
 	int32_t num_threads;  /* chunks decoded/encoded in parallel; 0 = all
 	                         cores; output identical for any count */
+	/* writing: called with the temporary file's path once it exists and
+	 * with NULL once it is gone (renamed over the output or removed), on
+	 * the writing thread, so that a program stopped by a signal mid-write
+	 * can remove it (the `sss` command does). NULL = not told. */
+	void (*temporary_fn)(const char *path, void *user);
+	void *temporary_user;
 } sss_exr_options;
 
 SSS_API void sss_exr_options_default(sss_exr_options *opt);
@@ -479,11 +487,26 @@ SSS_API sss_result sss_exr_add_pass(sss_exr *exr, const char *layer,
                                     const float *data, char *errbuf,
                                     size_t errbuf_len);
 
+/* Whether path may be written by sss_exr_write, before any work: it must
+ * be a file name (not empty, not ending in '/') that is absent or names a
+ * writable regular file. Refused, naming the path and what it is: a
+ * directory, FIFO, socket or device (`-o /dev/null` would otherwise
+ * replace the device with a file), a symbolic link (it would be replaced
+ * by a file, not written through: name its target instead) and a file
+ * without write permission (read-only outputs are kept). */
+SSS_API sss_result sss_exr_check_output(const char *path, char *errbuf,
+                                        size_t errbuf_len);
+
 /* Writes every pass as one single-part scanline file (original channels
  * keep their pixel type, so a round trip is lossless with NONE, RLE, ZIPS,
  * ZIP and PIZ) plus the input's header attributes, to a temporary file
- * beside `path` that is renamed over `path` only once complete. Refuses to
- * write over the file the image was read from (by name, link or inode). */
+ * beside `path` ("<dir>/.<name>.tmp-<pid>-<n>", held under an exclusive
+ * lock while written) that is renamed over `path` only once complete.
+ * Temporaries an earlier, stopped writer left for `path` are removed
+ * first; one whose lock is held (a live writer, on this host or another
+ * sharing the folder) is never touched. Refuses what
+ * sss_exr_check_output refuses and the file the image was read from (by
+ * name, link or inode). */
 SSS_API sss_result sss_exr_write(const sss_exr *exr, const char *path,
                                  const sss_exr_options *opt, char *errbuf,
                                  size_t errbuf_len);

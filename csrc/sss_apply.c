@@ -340,30 +340,46 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	int16_t *slot = malloc(npix * sizeof *slot);
 	float *signal = malloc(npix * 3 * sizeof *signal);
 	float *scratch = malloc(npix * 3 * sizeof *scratch);
-	if (!kernels || !by_index || !slot || !signal || !scratch) {
+	double *zrange = malloc(2 * (material_count ? material_count : 1) *
+	                        sizeof *zrange);
+	if (!kernels || !by_index || !slot || !signal || !scratch || !zrange) {
 		r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working memory "
 		          "for a %dx%d image", w, h);
 		goto done;
 	}
 
-	/* Kernels only for the table's materials that are on screen: a big
-	 * scene-wide table costs nothing for the materials this frame lacks. */
-	uint8_t on_screen[65536 / 8] = {0};
+	/* Kernels only for the table's materials that are on screen (a big
+	 * scene-wide table costs nothing for the materials this frame lacks),
+	 * each limited by how far its pixels can reach. */
+	for (int i = 0; i < 65536; i++)
+		by_index[i] = -1;
+	for (int32_t m = 0; m < material_count; m++)
+		by_index[materials[m].pass_index] = (int16_t)m;
+	for (int32_t m = 0; m < material_count; m++)
+		zrange[2 * m] = INFINITY, zrange[2 * m + 1] = -INFINITY;
 	for (int32_t y = 0; y < h; y++)
 		for (int32_t x = 0; x < w; x++) {
 			float index = sss__at(&p->index_ma, x, y)[0];
-			if (index >= 0.5f && index < 65535.5f) {
-				int32_t i = (int32_t)(index + 0.5f);
-				on_screen[i / 8] |= (uint8_t)(1u << (i % 8));
-			}
+			if (!(index >= 0.5f && index < 65535.5f))
+				continue;
+			int16_t m = by_index[(int32_t)(index + 0.5f)];
+			double z = sss__at(&p->depth, x, y)[0];
+			if (m < 0 || !isfinite(z))
+				continue;
+			zrange[2 * m] = fmin(zrange[2 * m], z);
+			zrange[2 * m + 1] = fmax(zrange[2 * m + 1], z);
 		}
-	for (int i = 0; i < 65536; i++)
-		by_index[i] = -1;
+	sss__projection proj;
+	sss__projection_make(cam, w, h, &proj, NULL, 0);
 	for (int32_t m = 0; m < material_count; m++) {
 		int32_t idx = materials[m].pass_index;
-		if (!(on_screen[idx / 8] & (1u << (idx % 8))))
-			continue;
-		sss__kernel_build(&materials[m], &opt, cam->unit_scale, &kernels[m]);
+		by_index[idx] = -1;
+		if (!(zrange[2 * m] <= zrange[2 * m + 1]))
+			continue; /* not on screen */
+		double limit = sss__reach_limit(&proj, opt.max_support_px, w, h,
+		                                zrange[2 * m], zrange[2 * m + 1]);
+		sss__kernel_build(&materials[m], &opt, cam->unit_scale, limit,
+		                  &kernels[m]);
 		if (kernels[m].support > 0.0)
 			by_index[idx] = (int16_t)m;
 	}
@@ -375,10 +391,9 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		.position = p->position.data,
 		.position_stride = p->position.data ? sss__stride(&p->position) : 0,
 		.position_channels = p->position.channels,
-		.max_support_px = opt.max_support_px,
+		.proj = proj, .max_support_px = opt.max_support_px,
 		.signal = signal, .scratch = scratch,
 	};
-	sss__projection_make(cam, w, h, &job.proj, NULL, 0);
 
 	rows_ctx rc = {p, materials, kernels, by_index, transmission,
 	               opt.background_depth, w, signal, slot, out_combined,
@@ -389,8 +404,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		if (opt.method == SSS_METHOD_REFERENCE)
 			r = sss__reference(&job, opt.num_threads);
 		else if (opt.method == SSS_METHOD_SEPARABLE_EXACT)
-			r = sss__separable_exact(&job, materials, material_count, &opt,
-			                         cam->unit_scale);
+			r = sss__separable_exact(&job, materials, material_count, &opt);
 		else if (opt.method == SSS_METHOD_DISK)
 			r = sss__disk(&job, opt.samples, opt.num_threads);
 		else
@@ -411,5 +425,6 @@ done:
 	free(slot);
 	free(signal);
 	free(scratch);
+	free(zrange);
 	return r;
 }

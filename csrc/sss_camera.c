@@ -75,6 +75,19 @@ double sss__pixels_per_unit_y(const sss__projection *p, double z)
 	return p->ortho ? p->fy : p->fy / z;
 }
 
+double sss__reach_limit(const sss__projection *p, int32_t max_support_px,
+                        int32_t width, int32_t height, double zmin,
+                        double zmax)
+{
+	double px = fmin((double)max_support_px, hypot(width, height));
+	double f = fmin(p->fx, p->fy);
+	if (!(zmin <= zmax) || !(f > 0.0) || (!p->ortho && !(zmax > 0.0)))
+		return 0.0;
+	double across = px / f * (p->ortho ? 1.0 : zmax);
+	double limit = SSS__REACH_FACTOR * hypot(across, zmax - zmin);
+	return isfinite(limit) && limit > 0.0 ? limit : 0.0;
+}
+
 void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
                          double out[3])
 {

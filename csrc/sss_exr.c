@@ -1,6 +1,7 @@
 /* sss_exr.c - multilayer EXR files through OpenEXR's C API (OpenEXRCore):
  * channels decoded straight into float passes, written back losslessly
  * through a temporary file. The only file of libsss that sees openexr.h. */
+#define _DEFAULT_SOURCE /* flock */
 #include "sss_internal.h"
 
 #include <openexr.h>
@@ -11,6 +12,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <time.h>
@@ -949,7 +952,8 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 
 	/* Our own descriptor: a missing file is SSS_ERR_IO, and its device
 	 * and inode identify the source for sss_exr_write's refusal. */
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC); /* a FIFO:
+	                                   no wait for a writer, refused below */
 	if (fd < 0)
 		return FAILX(SSS_ERR_IO, "%s: cannot open: %s", path,
 		             strerror(errno));
@@ -961,8 +965,8 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 	}
 	if (!S_ISREG(st.st_mode)) {
 		close(fd);
-		return FAILX(SSS_ERR_IO, "%s: %s", path, S_ISDIR(st.st_mode)
-		             ? "is a directory" : "is not a regular file");
+		return FAILX(SSS_ERR_IO, "%s: is %s; EXR files are read from "
+		             "regular files only", path, sss__file_kind(st.st_mode));
 	}
 	sss_exr *exr = calloc(1, sizeof *exr);
 	if (!exr || !(exr->path = dup_n(path, strlen(path)))) {
@@ -1115,6 +1119,25 @@ static void describe_layers(const sss_exr *exr, char *buf, size_t cap)
 		append(buf, cap, "none (the file has no channels)");
 }
 
+static exr_result_t source_attributes(const sss_exr *exr,
+                                      const exr_attribute_t ***list,
+                                      int32_t *count);
+
+/* Blender stamps a Cycles render's header with "cycles.<layer>.samples"
+ * and the like (EEVEE has no DiffInd pass, Cycles always can). */
+static int rendered_by_cycles(const sss_exr *exr, const char *layer)
+{
+	const exr_attribute_t **attrs = NULL;
+	int32_t n = 0, found = 0;
+	char prefix[MAX_NAME + 16];
+	snprintf(prefix, sizeof prefix, "cycles.%s.", layer);
+	if (source_attributes(exr, &attrs, &n) == EXR_ERR_SUCCESS)
+		for (int32_t i = 0; i < n && !found; i++)
+			found = strncmp(attrs[i]->name, prefix, strlen(prefix)) == 0;
+	free(attrs);
+	return found;
+}
+
 #define BLENDER_HINT "in Blender enable View Layer Properties > Passes > " \
 	"Light > Diffuse: Direct, Indirect, Color and Passes > Data: Z, " \
 	"Material Index"
@@ -1208,6 +1231,14 @@ sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
 		             "; layers in the file: %s; " BLENDER_HINT, exr->path,
 		             use, missing, strchr(missing, ',') ? "es" : "",
 		             layers);
+	}
+	if (!passes->diff_ind.data && rendered_by_cycles(exr, use)) {
+		memset(passes, 0, sizeof *passes);
+		return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s' is a Cycles "
+		             "render without a DiffInd pass: its indirect diffuse "
+		             "light would be lost; in Blender enable View Layer "
+		             "Properties > Passes > Light > Diffuse: Indirect",
+		             exr->path, use);
 	}
 	if (layer_used)
 		*layer_used = use;
@@ -1732,36 +1763,172 @@ static sss_result write_file(const sss_exr *exr, const sss_exr_options *o,
 	return SSS_OK;
 }
 
-/* Creates a new, unique, empty file beside path (same directory, so the
- * final rename is atomic): "<dir>/.<name>.tmp-<pid>-<n>". O_EXCL makes it
- * ours alone; mode 0666 less the umask, as any new file. */
-static int create_temp(const char *path, char **out)
+/* ------------------------------------------------- output and temporary */
+
+sss_result sss_exr_check_output(const char *path, char *errbuf,
+                                size_t errbuf_len)
+{
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (!path || !path[0])
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "the output path is empty");
+	size_t len = strlen(path);
+	if (path[len - 1] == '/')
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: names a directory",
+		             path);
+	struct stat st;
+	if (lstat(path, &st) != 0) {
+		int e = errno;
+		if (e != ENOENT)
+			return FAILX(SSS_ERR_IO, "%s: %s", path, strerror(e));
+		/* Absent: its folder must exist (said now, not after the work). */
+		const char *slash = strrchr(path, '/');
+		if (!slash)
+			return SSS_OK;
+		char *dir = dup_n(path, slash == path ? 1 : (size_t)(slash - path));
+		if (!dir)
+			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+		int bad = stat(dir, &st) != 0 ? errno
+		          : S_ISDIR(st.st_mode) ? 0 : ENOTDIR;
+		sss_result r = bad ? FAILX(SSS_ERR_IO, "%s: its folder %s: %s",
+		                           path, dir, strerror(bad)) : SSS_OK;
+		free(dir);
+		return r;
+	}
+	if (S_ISLNK(st.st_mode)) {
+		char target[512];
+		ssize_t n = readlink(path, target, sizeof target - 1);
+		target[n > 0 ? n : 0] = '\0';
+		return FAILX(SSS_ERR_IO, "%s: is a symbolic link (to %s); outputs "
+		             "replace regular files only and never write through a "
+		             "link: give the path of the file itself", path,
+		             n > 0 ? target : "?");
+	}
+	if (!S_ISREG(st.st_mode))
+		return FAILX(SSS_ERR_IO, "%s: is %s, not a regular file; it is not "
+		             "replaced", path, sss__file_kind(st.st_mode));
+	/* The permission bits as well as access(): root may write anything. */
+	if (!(st.st_mode & 0222) || access(path, W_OK) != 0)
+		return FAILX(SSS_ERR_IO, "%s: is read-only (mode %04o); it is not "
+		             "replaced", path, (unsigned)(st.st_mode & 07777));
+	return SSS_OK;
+}
+
+/* Temporaries are "<dir>/.<name>.tmp-<pid>-<hex>" beside their output (so
+ * the final rename is atomic), the name cut to 128 bytes to stay under
+ * NAME_MAX; create_temp and remove_stale_temporaries both build the
+ * prefix here. Returns the prefix's length, or -1 if it does not fit. */
+#define TEMP_NAME_MAX 128
+static int temp_prefix(const char *path, char *out, size_t cap,
+                       size_t *dir_len)
 {
 	const char *slash = strrchr(path, '/');
-	size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
-	size_t base_len = strlen(path + dir_len);
-	if (base_len > 128) /* stay under NAME_MAX */
-		base_len = 128;
-	size_t cap = dir_len + base_len + 64;
+	*dir_len = slash ? (size_t)(slash - path) + 1 : 0;
+	size_t base_len = strlen(path + *dir_len);
+	if (base_len > TEMP_NAME_MAX)
+		base_len = TEMP_NAME_MAX;
+	int n = snprintf(out, cap, "%.*s.%.*s.tmp-", (int)*dir_len, path,
+	                 (int)base_len, path + *dir_len);
+	return n >= 0 && (size_t)n < cap ? n : -1;
+}
+
+/* "<pid>-<hex>" and nothing else: what create_temp appends. */
+static int is_temp_suffix(const char *s)
+{
+	const char *p = s;
+	while (*p >= '0' && *p <= '9')
+		p++;
+	if (p == s || *p++ != '-' || !*p)
+		return 0;
+	for (; *p; p++)
+		if (!((*p >= '0' && *p <= '9') || (*p >= 'a' && *p <= 'f')))
+			return 0;
+	return 1;
+}
+
+static int same_file(const struct stat *a, const struct stat *b)
+{
+	return a->st_dev == b->st_dev && a->st_ino == b->st_ino;
+}
+
+/* Removes the temporaries that stopped writers left for path. A writer
+ * holds an exclusive flock on its temporary until it is renamed, so a
+ * temporary whose lock can be taken has no live writer, whatever host or
+ * PID namespace wrote it (a PID says nothing across those); it is
+ * removed only while that lock is held and the name is still that file. */
+static void remove_stale_temporaries(const char *path)
+{
+	size_t cap = strlen(path) + 64, dir_len;
+	char *prefix = malloc(cap), *full = malloc(cap + 256 + NAME_MAX);
+	int n = prefix ? temp_prefix(path, prefix, cap, &dir_len) : -1;
+	DIR *d = NULL;
+	if (n >= 0 && full) {
+		snprintf(full, cap, "%.*s", (int)(dir_len ? dir_len : 2),
+		         dir_len ? prefix : "./");
+		d = opendir(full);
+	}
+	const char *name = n >= 0 ? prefix + dir_len : NULL;
+	size_t name_len = n >= 0 ? (size_t)n - dir_len : 0;
+	struct dirent *e;
+	while (d && (e = readdir(d))) {
+		if (strncmp(e->d_name, name, name_len) != 0 ||
+		    !is_temp_suffix(e->d_name + name_len))
+			continue;
+		snprintf(full, cap + 256 + NAME_MAX, "%.*s%s", (int)dir_len, path,
+		         e->d_name);
+		int fd = open(full, O_RDONLY | O_NONBLOCK | O_NOFOLLOW | O_CLOEXEC);
+		if (fd < 0)
+			continue;
+		struct stat held, now;
+		if (fstat(fd, &held) == 0 && S_ISREG(held.st_mode) &&
+		    flock(fd, LOCK_EX | LOCK_NB) == 0 && lstat(full, &now) == 0 &&
+		    same_file(&held, &now))
+			unlink(full);
+		close(fd); /* releases the lock */
+	}
+	if (d)
+		closedir(d);
+	free(prefix);
+	free(full);
+}
+
+/* Creates a new, unique, empty temporary for path and takes its lock.
+ * O_EXCL makes it ours alone; mode 0666 less the umask, as any new file. */
+static int create_temp(const char *path, char **out)
+{
+	size_t dir_len, cap = strlen(path) + 64;
 	char *t = malloc(cap);
-	if (!t) {
+	int n = t ? temp_prefix(path, t, cap, &dir_len) : -1;
+	if (n < 0) {
+		free(t);
 		errno = ENOMEM;
 		return -1;
 	}
 	struct timespec ts;
 	clock_gettime(CLOCK_REALTIME, &ts);
 	/* Time and this call's buffer address: distinct across threads. */
-	unsigned long n = (unsigned long)ts.tv_nsec ^ (unsigned long)(uintptr_t)t;
-	for (int attempt = 0; attempt < 64; attempt++, n += 7919) {
-		snprintf(t, cap, "%.*s.%.*s.tmp-%ld-%lx", (int)dir_len, path,
-		         (int)base_len, path + dir_len, (long)getpid(), n & 0xffffffUL);
+	unsigned long id = (unsigned long)ts.tv_nsec ^ (unsigned long)(uintptr_t)t;
+	for (int attempt = 0; attempt < 64; attempt++, id += 7919) {
+		snprintf(t + n, cap - (size_t)n, "%ld-%lx", (long)getpid(),
+		         id & 0xffffffUL);
 		int fd = open(t, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-		if (fd >= 0) {
-			*out = t;
-			return fd;
-		}
-		if (errno != EEXIST)
+		if (fd < 0 && errno == EEXIST)
+			continue;
+		if (fd < 0)
 			break;
+		/* A cleaner may have taken it between open and flock, to remove
+		 * it: then it is not ours any more; take another name. A file
+		 * system without locks keeps the file unlocked (and safe from
+		 * cleaners, which need the lock). */
+		struct stat mine, named;
+		int locked = flock(fd, LOCK_EX | LOCK_NB) == 0;
+		if ((!locked && errno == EWOULDBLOCK) || fstat(fd, &mine) != 0 ||
+		    stat(t, &named) != 0 || !same_file(&mine, &named)) {
+			close(fd);
+			continue;
+		}
+		*out = t;
+		return fd;
 	}
 	int e = errno;
 	free(t);
@@ -1777,47 +1944,51 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 	sss_result r;
 	if (errbuf && errbuf_len)
 		errbuf[0] = '\0';
-	if (!exr || !path || !path[0])
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_write: %s",
-		             exr ? "no path" : "exr is NULL");
+	if (!exr)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_write: exr is NULL");
 	if ((r = get_options(opt, &o, errbuf, errbuf_len)))
 		return r;
-	if (path[strlen(path) - 1] == '/')
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: names a directory",
-		             path);
 	if (exr->pass_count == 0)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: the image has no "
-		             "channels to write", path);
+		             "channels to write", path && path[0] ? path : "output");
 
-	/* Same device and inode as the source (any name, link or symlink
-	 * to it): refused, so a failed or partial run never loses a render. */
+	/* Same device and inode as the source (any name or link to it):
+	 * refused, so a failed or partial run never loses a render. */
 	struct stat st;
-	if (stat(path, &st) == 0) {
-		if (st.st_dev == exr->dev && st.st_ino == exr->ino)
-			return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: is the file this "
-			             "image was read from (%s); refusing to overwrite "
-			             "it", path, exr->path);
-		if (S_ISDIR(st.st_mode))
-			return FAILX(SSS_ERR_IO, "%s: is a directory", path);
-	}
+	if (path && stat(path, &st) == 0 && st.st_dev == exr->dev &&
+	    st.st_ino == exr->ino)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: is the file this image "
+		             "was read from (%s); refusing to overwrite it", path,
+		             exr->path);
+	if ((r = sss_exr_check_output(path, errbuf, errbuf_len)))
+		return r;
 
+	remove_stale_temporaries(path);
 	char *tmp = NULL;
 	int fd = create_temp(path, &tmp);
 	if (fd < 0)
 		return FAILX(errno == ENOMEM ? SSS_ERR_OUT_OF_MEMORY : SSS_ERR_IO,
 		             "%s: cannot create a temporary file in its directory: "
 		             "%s", path, strerror(errno));
+	if (o.temporary_fn)
+		o.temporary_fn(tmp, o.temporary_user);
 	xio io;
 	xio_init(&io, fd);
 	r = write_file(exr, &o, path, tmp, &io, errbuf, errbuf_len);
-	if (close(fd) && !r)
-		r = FAILX(SSS_ERR_IO, "%s: writing %s: %s", path, tmp,
-		          strerror(errno));
-	if (!r && rename(tmp, path))
+	/* Renamed before the close releases the lock, so that no cleaner
+	 * takes a complete temporary for a stale one. */
+	int renamed = !r && rename(tmp, path) == 0;
+	if (!r && !renamed)
 		r = FAILX(SSS_ERR_IO, "%s: cannot rename %s to it: %s", path, tmp,
 		          strerror(errno));
-	if (r)
+	if (close(fd) && !r) { /* a late write error (network file systems) */
+		r = FAILX(SSS_ERR_IO, "%s: writing: %s", path, strerror(errno));
+		unlink(path);
+	} else if (r && !renamed) {
 		unlink(tmp); /* path itself was never touched */
+	}
+	if (o.temporary_fn)
+		o.temporary_fn(NULL, o.temporary_user);
 	pthread_mutex_destroy(&io.lock);
 	free(tmp);
 	return r;

@@ -17,6 +17,7 @@
  * units (after unit_scale and radius_scale), tabulated once per call. */
 typedef struct sss__kernel {
 	double support;      /* scene units; 0 = no scattering */
+	double len;          /* scene units per metre of profile length */
 	float mix[3];        /* per-channel share that scatters (strength) */
 	int32_t texturing;   /* sss_texturing */
 	int32_t taps;        /* odd, >= 1 */
@@ -50,14 +51,21 @@ typedef struct sss__job {
 	float *scratch;         /* RGB, packed: the horizontal pass */
 } sss__job;
 
+/* "a directory", "a FIFO (named pipe)", ...: what a stat mode names, for
+ * messages that refuse a file (sss_status.c). */
+const char *sss__file_kind(unsigned mode);
+
 /* errbuf helper: formats into errbuf when given, returns code. */
 sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
                      const char *fmt, ...)
 	__attribute__((format(printf, 4, 5)));
 
-/* Profiles (sss_profile.c). */
+/* Profiles (sss_profile.c). A support beyond max_support (scene units;
+ * 0 = no limit) is shrunk to it, profile lengths with it: see
+ * sss__reach_limit. */
 sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
-                             double unit_scale, sss__kernel *k);
+                             double unit_scale, double max_support,
+                             sss__kernel *k);
 float sss__table_lookup(const float *table, double x, double inv_support);
 /* Mass of the 1-D profile over [a, b] (b >= a; either may be negative),
  * per channel. */
@@ -81,6 +89,18 @@ void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
                          double out[3]);
 double sss__pixels_per_unit_x(const sss__projection *p, double z);
 double sss__pixels_per_unit_y(const sss__projection *p, double z);
+/* The largest kernel support (scene units) worth tabulating for pixels at
+ * depths [zmin, zmax]: SSS__REACH_FACTOR times the farthest distance a
+ * blur can reach between two of them; 0 = no limit (a degenerate depth). */
+double sss__reach_limit(const sss__projection *p, int32_t max_support_px,
+                        int32_t width, int32_t height, double zmin,
+                        double zmax);
+/* Past it a profile's e^{-r/d} (Burley: support 16 d) varies by under
+ * 2 % across everything the blur can see, so the shrunk kernel is the
+ * huge one to that accuracy; the tables then resolve what the blur reads
+ * (their first node would otherwise lie beyond the image, and the
+ * per-area density 1/d^2 underflow a float). */
+#define SSS__REACH_FACTOR 1000.0
 
 /* Taps right of the centre (sss_separable.c); arrays hold
  * SSS__MAX_HALF_TAPS entries. */
@@ -101,7 +121,7 @@ sss_result sss__reference(const sss__job *job, int32_t num_threads);
 sss_result sss__separable_exact(const sss__job *job,
                                 const sss_material *materials,
                                 int32_t material_count,
-                                const sss_options *opt, double unit_scale);
+                                const sss_options *opt);
 /* Burley (d = 1) truncated at `truncate` as SSS__BURLEY_LOBES Gaussian
  * lobes: their standard deviations and weights (summing to 1), fitted to
  * the truncated radial CDF (sss_lobes.c). Returns the lobe count. */
@@ -111,12 +131,13 @@ int sss__burley_lobes(double truncate, double sigma[], double weight[]);
 sss_result sss__disk(const sss__job *job, int32_t samples,
                      int32_t num_threads);
 
-/* Channel c of a material as a sum of 2-D Gaussians in scene units (as
- * sss__kernel_build scales it): fills variances and weights (summing to 1)
- * and returns their count; returns 0 for Burley with *burley_d set to d in
- * scene units (0 for a channel that does not scatter). (sss_profile.c) */
+/* Channel c of a material as a sum of 2-D Gaussians in scene units, len
+ * scene units per metre of profile length (a kernel's len): fills
+ * variances and weights (summing to 1) and returns their count; returns 0
+ * for Burley with *burley_d set to d in scene units (0 for a channel that
+ * does not scatter). (sss_profile.c) */
 int sss__profile_gaussians(const sss_material *mat, const sss_options *opt,
-                           double unit_scale, int c,
+                           double len, int c,
                            double var[SSS_MAX_GAUSSIANS],
                            double w[SSS_MAX_GAUSSIANS], double *burley_d);
 

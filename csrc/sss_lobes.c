@@ -204,16 +204,15 @@ int sss__burley_lobes(double truncate, double sigma[], double weight[])
 
 /* The lobes of material m, whose kernel k has support > 0. */
 static void lobes_build(const sss_material *mat, const sss_options *opt,
-                        double unit_scale, const sss__kernel *k,
-                        lobe_set *set)
+                        const sss__kernel *k, lobe_set *set)
 {
 	double var[3][MAX_LOBES], w[3][MAX_LOBES];
 	int n = 0;
 	memset(set, 0, sizeof *set);
 	for (int c = 0; c < 3; c++) {
 		double d;
-		int nc = sss__profile_gaussians(mat, opt, unit_scale, c, var[c],
-		                                w[c], &d);
+		int nc = sss__profile_gaussians(mat, opt, k->len, c, var[c], w[c],
+		                                &d);
 		if (nc == 0) { /* Burley: fit this channel */
 			double sigma[MAX_LOBES];
 			nc = SSS__BURLEY_LOBES;
@@ -461,7 +460,7 @@ static void finish_rows(void *vctx, int32_t y0, int32_t y1)
 sss_result sss__separable_exact(const sss__job *job,
                                 const sss_material *materials,
                                 int32_t material_count,
-                                const sss_options *opt, double unit_scale)
+                                const sss_options *opt)
 {
 	size_t npix = (size_t)job->width * (size_t)job->height;
 	lobe_set *sets = calloc(material_count ? material_count : 1,
@@ -482,8 +481,7 @@ sss_result sss__separable_exact(const sss__job *job,
 	for (int32_t m = 0; m < material_count; m++) {
 		if (!(job->kernels[m].support > 0.0))
 			continue;
-		lobes_build(&materials[m], opt, unit_scale, &job->kernels[m],
-		            &sets[m]);
+		lobes_build(&materials[m], opt, &job->kernels[m], &sets[m]);
 		if (sets[m].count > most)
 			most = sets[m].count;
 	}

@@ -5,13 +5,14 @@
 #include "sss.h"
 
 #include <ctype.h>
-#include <dirent.h>
 #include <errno.h>
-#include <signal.h>
 #include <getopt.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static const char usage_text[] =
@@ -27,10 +28,14 @@ static const char usage_text[] =
 "Position are used when present.\n"
 "\n"
 "options:\n"
-"  -o, --output PATH       output file (#### pattern for sequences); never\n"
-"                          the input file; written to a temporary file first\n"
+"  -o, --output PATH       output file (#### pattern for sequences); written\n"
+"                          to a temporary file first, then renamed; only\n"
+"                          ever replaces a writable regular file that is\n"
+"                          neither the input nor the scene (not a device,\n"
+"                          FIFO, directory or symbolic link)\n"
 "  -s, --scene PATH        scene description (JSON: camera, unit scale,\n"
-"                          materials by pass index; see docs/scene.md)\n"
+"                          materials by pass index; see docs/scene.md); a\n"
+"                          file or a pipe\n"
 "  -f, --frames LIST       frames for #### patterns: 1-240, 1-240x2, 7,9,12-20\n"
 "  -m, --method NAME       separable (default: fast), separable-exact (two\n"
 "                          passes per Gaussian lobe: exact for Gaussian sums,\n"
@@ -48,8 +53,9 @@ static const char usage_text[] =
 "  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
 "      --max-size WxH      refuse inputs larger than this, each 1..1048576\n"
 "                          (default 32768x32768 and 2^28 pixels in all)\n"
-"      --resume            skip frames whose output exists (outputs appear\n"
-"                          only when complete, so a killed run resumes)\n"
+"      --resume            skip frames whose output exists and reads back\n"
+"                          complete (outputs appear only when complete, so\n"
+"                          a stopped run resumes)\n"
 "  -q, --quiet             print errors only\n"
 "  -h, --help              this text\n"
 "  -V, --version           version\n"
@@ -243,39 +249,110 @@ static int expand(const char *pattern, int frame, char *out, size_t len)
 	return n >= 0 && (size_t)n < len ? 0 : -1;
 }
 
-/* Removes temporary files a killed earlier run left for `out`
- * ("<dir>/.<name>.tmp-<pid>-<n>", see sss_exr_write) when that process is
- * gone: a frame is either complete under its name or absent. */
-static void remove_stale_temporaries(const char *out)
+/* ------------------------------------------------- stopping mid-write */
+
+/* The temporary file being written (the library says, through
+ * temporary_fn), so that SIGINT, SIGTERM, SIGHUP and SIGQUIT remove it
+ * before the process dies of the signal; SIGKILL leaves it to the next
+ * run's clean-up (see sss_exr_write). */
+static char pending_temp[8192];
+static volatile sig_atomic_t have_temp;
+
+static void on_temporary(const char *path, void *user)
 {
-	const char *slash = strrchr(out, '/');
-	const char *name = slash ? slash + 1 : out;
-	char dir[4096];
-	if (!slash)
-		snprintf(dir, sizeof dir, ".");
-	else if (slash == out)
-		snprintf(dir, sizeof dir, "/");
-	else
-		snprintf(dir, sizeof dir, "%.*s", (int)(slash - out), out);
-	char prefix[1024];
-	int n = snprintf(prefix, sizeof prefix, ".%s.tmp-", name);
-	if (n < 0 || (size_t)n >= sizeof prefix)
-		return;
-	DIR *d = opendir(dir);
-	if (!d)
-		return;
-	struct dirent *e;
-	while ((e = readdir(d))) {
-		if (strncmp(e->d_name, prefix, (size_t)n) != 0)
-			continue;
-		long pid = strtol(e->d_name + n, NULL, 10);
-		if (pid <= 0 || (kill((pid_t)pid, 0) != 0 && errno == ESRCH)) {
-			char path[8192];
-			snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-			unlink(path);
-		}
+	(void)user;
+	have_temp = 0;
+	atomic_signal_fence(memory_order_seq_cst);
+	if (path && strlen(path) < sizeof pending_temp) {
+		memcpy(pending_temp, path, strlen(path) + 1);
+		atomic_signal_fence(memory_order_seq_cst);
+		have_temp = 1;
 	}
-	closedir(d);
+}
+
+static void on_signal(int sig)
+{
+	if (have_temp)
+		unlink(pending_temp);
+	signal(sig, SIG_DFL);
+	raise(sig);
+}
+
+static void catch_signals(void)
+{
+	static const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+	struct sigaction sa;
+	memset(&sa, 0, sizeof sa);
+	sa.sa_handler = on_signal;
+	sigfillset(&sa.sa_mask); /* one handler at a time */
+	for (size_t i = 0; i < sizeof sigs / sizeof *sigs; i++) {
+		struct sigaction old;
+		/* An ignored signal stays ignored (nohup, a shell's &). */
+		if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+			sigaction(sigs[i], &sa, NULL);
+	}
+}
+
+/* ----------------------------------------------------- per-frame checks */
+
+typedef struct file_id {
+	int known;
+	dev_t dev;
+	ino_t ino;
+} file_id;
+
+static file_id identify(const char *path)
+{
+	struct stat st;
+	file_id id = {0, 0, 0};
+	if (path && stat(path, &st) == 0)
+		id = (file_id){1, st.st_dev, st.st_ino};
+	return id;
+}
+
+static int same(file_id a, file_id b)
+{
+	return a.known && b.known && a.dev == b.dev && a.ino == b.ino;
+}
+
+/* What must hold before a frame's work starts: out may be written and is
+ * neither its input nor the scene. 0, or the message in err. */
+static int check_frame(const char *in, const char *out, file_id scene,
+                       const char *scene_path, char *err, size_t len)
+{
+	if (sss_exr_check_output(out, err, len) != SSS_OK)
+		return -1;
+	file_id o = identify(out);
+	if (same(o, identify(in))) {
+		snprintf(err, len, "%s: is the input file %s; refusing to "
+		         "overwrite it", out, in);
+		return -1;
+	}
+	if (same(o, scene)) {
+		snprintf(err, len, "%s: is the scene description %s; refusing "
+		         "to overwrite it", out, scene_path);
+		return -1;
+	}
+	return 0;
+}
+
+/* --resume: an existing output counts as done only if it reads back
+ * whole with the SSS layer (an empty or cut file from a crash, or some
+ * other file under that name, does not). */
+static int complete_output(const char *out, const sss_exr_options *o,
+                           char *why, size_t len)
+{
+	sss_exr *exr = NULL;
+	sss_image view;
+	if (sss_exr_read(out, o, &exr, why, len) != SSS_OK)
+		return 0;
+	int ok = sss_exr_find(exr, SSS_RESULT_LAYER, "Combined", &view) ==
+	         SSS_OK;
+	if (!ok)
+		snprintf(why, len, "%s: has no %s.Combined pass", out,
+		         SSS_RESULT_LAYER);
+	sss_exr_free(exr);
+	return ok;
 }
 
 static void progress_bar(int done, int total, int failed)
@@ -377,6 +454,8 @@ int main(int argc, char **argv)
 	a.input = argv[optind];
 	if (!a.output)
 		return usage_error("%s", "missing -o OUTPUT");
+	if (!a.output[0])
+		return usage_error("%s", "-o OUTPUT is empty");
 	if (!a.scene)
 		return usage_error("%s", "missing --scene SCENE.json (camera and "
 		                         "materials)");
@@ -418,6 +497,8 @@ int main(int argc, char **argv)
 		return 2;
 	}
 
+	file_id scene_id = identify(a.scene);
+	catch_signals();
 	int failed = 0, skipped = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
 	                                   frames.count > 1;
 	sss_process_options po;
@@ -433,17 +514,26 @@ int main(int argc, char **argv)
 		po.exr.max_pixels = a.max_pixels;
 	if (a.compression >= 0)
 		po.exr.compression = a.compression;
+	po.exr.temporary_fn = on_temporary;
 	sss_timings total = {0, 0, 0};
 	for (int i = 0; i < frames.count; i++) {
 		char in[4096], out[4096];
 		int f = frames.frames[i];
 		sss_timings t = {0, 0, 0};
 		int bad = 0;
+		char why[sizeof err];
 		if (expand(a.input, f, in, sizeof in) ||
 		    expand(a.output, f, out, sizeof out)) {
-			snprintf(err, sizeof err, "frame %d: path too long", f);
+			const char *which = expand(a.input, f, in, sizeof in) ? a.input
+			                                                      : a.output;
+			snprintf(err, sizeof err, "frame %d: the path made from %.80s... "
+			         "is longer than %zu bytes", f, which, sizeof in - 1);
 			bad = 1;
-		} else if (a.resume && access(out, F_OK) == 0) {
+		} else if (check_frame(in, out, scene_id, a.scene, err,
+		                       sizeof err)) {
+			bad = 1;
+		} else if (a.resume && access(out, F_OK) == 0 &&
+		           complete_output(out, &po.exr, why, sizeof why)) {
 			skipped++;
 			if (!a.quiet)
 				printf("%s: exists, skipped (--resume)\n", out);
@@ -451,7 +541,9 @@ int main(int argc, char **argv)
 				progress_bar(i + 1, frames.count, failed);
 			continue;
 		} else {
-			remove_stale_temporaries(out);
+			if (a.resume && access(out, F_OK) == 0)
+				fprintf(stderr, "sss: %s: exists but is not a complete "
+				        "output (%s); writing it again\n", out, why);
 			bad = sss_process_exr(in, out, scene, &po, &t, err,
 			                      sizeof err) != SSS_OK;
 		}
@@ -479,5 +571,12 @@ int main(int argc, char **argv)
 	sss_scene_free(scene);
 	if (frames.frames != &single)
 		free(frames.frames);
+	/* A report that could not be written (a full disk, a closed pipe) is
+	 * a failure too, not exit status 0. */
+	if (fflush(stdout) != 0 || ferror(stdout)) {
+		fprintf(stderr, "sss: error: cannot write to standard output: %s\n",
+		        strerror(errno));
+		return 1;
+	}
 	return failed ? 1 : 0;
 }

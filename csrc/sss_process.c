@@ -187,9 +187,9 @@ sss_result sss_process_exr(const char *in, const char *out,
 	}
 
 	t0 = now();
-	if ((r = sss_exr_add_pass(exr, "SSS", "Combined", "RGBA", combined, err,
+	if ((r = sss_exr_add_pass(exr, SSS_RESULT_LAYER, "Combined", "RGBA", combined, err,
 	                          errlen)) ||
-	    (r = sss_exr_add_pass(exr, "SSS", "DiffLight", "RGB", light, err,
+	    (r = sss_exr_add_pass(exr, SSS_RESULT_LAYER, "DiffLight", "RGB", light, err,
 	                          errlen)) ||
 	    (r = sss_exr_write(exr, out, &opt.exr, err, errlen)))
 		goto done;

@@ -301,12 +301,27 @@ static int32_t odd_taps(int32_t taps)
 }
 
 sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
-                             double unit_scale, sss__kernel *k)
+                             double unit_scale, double max_support,
+                             sss__kernel *k)
 {
 	memset(k, 0, sizeof *k);
 	k->texturing = mat->texturing;
 	k->taps = odd_taps(mat->taps > 0 ? mat->taps : opt->taps);
 	double len = (double)opt->radius_scale / unit_scale; /* metres -> units */
+	if (max_support > 0.0 && mat->kind != SSS_PROFILE_NONE) {
+		/* Support grows linearly with len: past the limit every profile
+		 * length is shrunk alike, so the kernel keeps its shape. */
+		double per_len = 0.0;
+		for (int c = 0; c < 3; c++) {
+			channel one;
+			double s = channel_make(mat, c, 1.0, k->taps, &one);
+			if (s > per_len)
+				per_len = s;
+		}
+		if (per_len > 0.0 && per_len * len > max_support)
+			len = max_support / per_len;
+	}
+	k->len = len;
 
 	int any = 0;
 	for (int c = 0; c < 3; c++) {
@@ -371,12 +386,11 @@ sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
 }
 
 int sss__profile_gaussians(const sss_material *mat, const sss_options *opt,
-                           double unit_scale, int c,
+                           double len, int c,
                            double var[SSS_MAX_GAUSSIANS],
                            double w[SSS_MAX_GAUSSIANS], double *burley_d)
 {
 	channel ch;
-	double len = (double)opt->radius_scale / unit_scale;
 	channel_make(mat, c, len, odd_taps(mat->taps > 0 ? mat->taps : opt->taps),
 	             &ch);
 	*burley_d = ch.burley ? ch.d : 0.0;

@@ -6,10 +6,13 @@
 #include <cJSON.h>
 
 #include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* A scene file larger than this is certainly not a scene description. */
 #define SCENE_MAX_BYTES ((size_t)16 << 20)
@@ -856,14 +859,30 @@ done:
 	return r;
 }
 
-/* Reads the whole file, growing the buffer, so pipes work too. */
+/* Reads the whole file, growing the buffer, so pipes work too (a shell's
+ * <(...)). Opened without blocking: a FIFO nobody writes to reads as
+ * empty instead of waiting forever; devices and sockets are refused. */
 static sss_result read_file(const char *path, char **data, size_t *len,
                             char *errbuf, size_t errbuf_len)
 {
 	char msg[128];
-	FILE *fp = fopen(path, "rb");
+	int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	struct stat st;
+	FILE *fp = NULL;
+	if (fd >= 0 && fstat(fd, &st) == 0 && !S_ISREG(st.st_mode) &&
+	    !S_ISFIFO(st.st_mode)) {
+		close(fd);
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_IO, "%s: is %s, not "
+		                 "a scene description file", path,
+		                 sss__file_kind(st.st_mode));
+	}
+	/* Blocking again for the reads: a pipe's writer may be slow. */
+	if (fd >= 0 && fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK) == 0)
+		fp = fdopen(fd, "rb");
 	if (!fp) {
 		int e = errno;
+		if (fd >= 0)
+			close(fd);
 		if (strerror_r(e, msg, sizeof msg))
 			snprintf(msg, sizeof msg, "error %d", e);
 		return sss__fail(errbuf, errbuf_len, SSS_ERR_IO,

@@ -636,7 +636,7 @@ sss_result sss_kernel_1d(const sss_material *mat, double pixels_per_metre,
 		free(tap);
 		return SSS_ERR_OUT_OF_MEMORY;
 	}
-	sss__kernel_build(&m, &opt, 1.0, k);
+	sss__kernel_build(&m, &opt, 1.0, 0.0, k);
 
 	/* On a flat fronto-parallel plane a tap's distance is its offset. */
 	double r = k->support * pixels_per_metre;

@@ -3,6 +3,7 @@
 
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 
 /* Parallel tables indexed by enum sss_status (the OpenEXRCore pattern);
  * test_api checks that every code has both. */
@@ -122,4 +123,13 @@ size_t sss_struct_size(const char *name)
 		if (strcmp(name, sizes[i].name) == 0)
 			return sizes[i].size;
 	return 0;
+}
+
+const char *sss__file_kind(unsigned mode)
+{
+	mode_t m = (mode_t)mode;
+	return S_ISDIR(m) ? "a directory" : S_ISFIFO(m) ? "a FIFO (named pipe)"
+	       : S_ISSOCK(m) ? "a socket" : S_ISCHR(m) ? "a character device"
+	       : S_ISBLK(m) ? "a block device" : S_ISLNK(m) ? "a symbolic link"
+	       : S_ISREG(m) ? "a regular file" : "not a regular file";
 }

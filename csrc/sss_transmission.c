@@ -258,7 +258,7 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 	switch (m->model) {
 	case SSS_TRANSMISSION_BURLEY:
 		for (int c = 0; c < 3; c++) {
-			m->n[c] = sss__profile_gaussians(mat, opt, unit_scale, c,
+			m->n[c] = sss__profile_gaussians(mat, opt, len, c,
 			                                 m->var[c], m->w[c], &m->d[c]);
 			if (m->n[c] != 0 || !(m->d[c] > 0.0))
 				continue;

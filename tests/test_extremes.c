@@ -207,6 +207,76 @@ static void test_scales(void)
 	synth_free(s);
 }
 
+/* Radii far past everything a blur can reach: every method tends to one
+ * limit (light spread over what it reaches, kernels shrunk alike by
+ * sss__reach_limit), instead of some returning the input when their
+ * tables underflowed. Past the limit the result no longer changes at
+ * all; each method scatters and stays close to the reference. */
+static void test_huge_radii_limit(void)
+{
+	int w = 24, h = 20;
+	synth *s = synth_new(w, h);
+	synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
+	synth_noise(s, 0.0f, 1.0f, 7);
+	const float scales[] = {1e9f, 1e15f, 1e20f, 1e30f};
+	size_t n = (size_t)3 * w * h;
+	float *ref = NULL;
+	for (size_t mt = 0; mt < NMETHODS; mt++) {
+		float *first = NULL;
+		for (size_t k = 0; k < sizeof scales / sizeof *scales; k++) {
+			sss_material m;
+			sss_material_default(&m, SSS_PROFILE_BURLEY);
+			m.pass_index = 1;
+			sss_options o;
+			sss_options_default(&o);
+			o.method = methods[mt];
+			o.radius_scale = scales[k];
+			sss_passes p = synth_passes(s);
+			sss_camera cam;
+			sss_camera_default(&cam);
+			float *light = calloc(n, sizeof(float));
+			sss_image ol = {light, w, h, 3, 0};
+			sss_result r = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol, NULL, 0);
+			double moved = 0, sum_in = 0, sum_out = 0;
+			for (size_t i = 0; i < n; i++) {
+				moved = fmax(moved, fabs(light[i] - s->diff_dir[i]));
+				sum_in += s->diff_dir[i];
+				sum_out += light[i];
+			}
+			char id[96];
+			snprintf(id, sizeof id, "huge-radius/m=%d/scale=%g", methods[mt],
+			         (double)scales[k]);
+			CHECK(id, r == SSS_OK && moved > 0.2, "%s, largest change %g "
+			      "(the input came back)", sss_status_name(r), moved);
+			CHECK(id, fabs(sum_out / sum_in - 1.0) < 0.03, "mean changed by "
+			      "%.2f %%", 100 * (sum_out / sum_in - 1.0));
+			if (!first) {
+				first = light;
+				continue;
+			}
+			CHECK(id, memcmp(first, light, n * sizeof *light) == 0,
+			      "differs from scale %g: not at the limit", (double)scales[0]);
+			free(light);
+		}
+		if (methods[mt] == SSS_METHOD_REFERENCE) {
+			ref = first;
+			continue;
+		}
+		if (ref) {
+			double diff = 0;
+			for (size_t i = 0; i < n; i++)
+				diff += fabs(first[i] - ref[i]);
+			char id[64];
+			snprintf(id, sizeof id, "huge-radius/m=%d/vs-reference",
+			         methods[mt]);
+			CHECK(id, diff / n < 0.05, "mean |difference| %g", diff / n);
+		}
+		free(first);
+	}
+	free(ref);
+	synth_free(s);
+}
+
 /* An impulse in the middle of a plane: its light is spread, not created
  * or lost (interior pixels, kernels inside the image), for every profile
  * kind, method and tap count. */
@@ -291,5 +361,6 @@ int main(void)
 	test_energy();
 	test_constant_extremes();
 	test_scales();
+	test_huge_radii_limit();
 	return tu_finish("test_extremes");
 }

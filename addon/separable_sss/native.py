@@ -6,7 +6,7 @@ import importlib.util
 import os
 import threading
 
-ABI_VERSION = 4  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 5  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -26,7 +26,9 @@ class ExrOptions(ctypes.Structure):
                 ("max_height", ctypes.c_int32),
                 ("max_pixels", ctypes.c_int64),
                 ("compression", ctypes.c_int32),
-                ("num_threads", ctypes.c_int32)]
+                ("num_threads", ctypes.c_int32),
+                ("temporary_fn", ctypes.c_void_p),
+                ("temporary_user", ctypes.c_void_p)]
 
 
 class ProcessOptions(ctypes.Structure):

@@ -30,14 +30,17 @@ def read_raw(path):
     return out
 
 
-def write_channels(path, channels, width, height, half=()):
-    """Writes {name: (h, w) array} as one EXR (names as given)."""
+def write_channels(path, channels, width, height, half=(), attributes=None):
+    """Writes {name: (h, w) array} as one EXR (names as given), with extra
+    string header attributes {name: value}."""
     names = list(channels)
     spec = oiio.ImageSpec(width, height, len(names), oiio.FLOAT)
     spec.channelnames = names
     spec.channelformats = [oiio.HALF if n in half else oiio.FLOAT
                            for n in names]
     spec.attribute("compression", "zip")
+    for key, value in (attributes or {}).items():
+        spec.attribute(key, value)
     out = oiio.ImageOutput.create(str(path))
     assert out.open(str(path), spec), out.geterror()
     data = np.stack([channels[n] for n in names], axis=-1).astype(np.float32)

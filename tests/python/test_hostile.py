@@ -1,0 +1,446 @@
+"""The `sss` command against hostile input: the file system's odd corners
+(devices, FIFOs, sockets, links, read-only and missing folders), numbers
+at and past their limits, signals and other writers mid-write, --resume
+over broken outputs, silent physics and messages that must name what is
+wrong. Every case: a clear message, nothing destroyed, no hang. make check
+runs them again against the ASan + UBSan build."""
+import fcntl
+import json
+import os
+import shutil
+import signal
+import socket
+import stat
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from conftest import run
+from exr import pass_rgb, read_channels, write_channels
+
+HANG = 30  # seconds: anything slower is a hang
+
+
+def args_for(blender_render, src, out, *extra):
+    return [src, "-o", out, "--scene", blender_render / "scene.json", *extra]
+
+
+def only(tmp_path, *names):
+    """The folder holds exactly these names (no output, no temporary)."""
+    assert sorted(os.listdir(tmp_path)) == sorted(names)
+
+
+# ------------------------------------------------- files it must not write
+
+def special_file(kind, path):
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "socket":
+        sock = socket.socket(socket.AF_UNIX)
+        sock.bind(str(path))
+        return sock
+    elif kind == "device":
+        try:  # /dev/null's numbers, in our folder: never the real one
+            os.mknod(path, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        except PermissionError:
+            pytest.skip("creating a device node needs root")
+    elif kind == "directory":
+        path.mkdir()
+    return None
+
+
+@pytest.mark.parametrize("kind,needle", [
+    ("fifo", "is a FIFO"), ("socket", "is a socket"),
+    ("device", "is a character device"), ("directory", "is a directory")])
+def test_output_never_replaces_a_special_file(sss_cmd, blender_render,
+                                              tmp_path, kind, needle):
+    out = tmp_path / "out.exr"
+    keep = special_file(kind, out)
+    before = os.lstat(out)
+    proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                  "render.exr", out), check=1)
+    assert needle in proc.stderr and "out.exr" in proc.stderr, proc.stderr
+    after = os.lstat(out)
+    assert stat.S_IFMT(after.st_mode) == stat.S_IFMT(before.st_mode)
+    assert after.st_ino == before.st_ino
+    only(tmp_path, "out.exr")
+    if keep:
+        keep.close()
+
+
+def test_output_is_not_the_scene(sss_cmd, blender_render, tmp_path):
+    scene = tmp_path / "s.json"
+    shutil.copy(blender_render / "scene.json", scene)
+    before = scene.read_bytes()
+    proc = run(sss_cmd, blender_render / "render.exr", "-o", scene,
+               "--scene", scene, check=1)
+    assert "scene description" in proc.stderr and "s.json" in proc.stderr
+    assert scene.read_bytes() == before
+    only(tmp_path, "s.json")
+
+
+def test_symbolic_link_is_refused_and_kept(sss_cmd, blender_render,
+                                           tmp_path):
+    """Policy: an output that is a symbolic link is refused (neither
+    replaced by a file nor written through); the message says so."""
+    target = tmp_path / "target.exr"
+    target.write_bytes(b"someone's file")
+    link = tmp_path / "out.exr"
+    link.symlink_to(target)
+    proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                  "render.exr", link), check=1)
+    assert "symbolic link" in proc.stderr and "target.exr" in proc.stderr
+    assert link.is_symlink() and target.read_bytes() == b"someone's file"
+    only(tmp_path, "out.exr", "target.exr")
+
+
+def test_read_only_output_is_kept(sss_cmd, blender_render, tmp_path):
+    out = tmp_path / "out.exr"
+    out.write_bytes(b"an earlier result")
+    out.chmod(0o444)
+    proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                  "render.exr", out), check=1)
+    assert "read-only" in proc.stderr and "0444" in proc.stderr
+    assert out.read_bytes() == b"an earlier result"
+    only(tmp_path, "out.exr")
+
+
+def test_missing_folder_is_said_before_the_work(sss_cmd, blender_render,
+                                                tmp_path):
+    out = tmp_path / "no" / "such" / "out.exr"
+    proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                  "render.exr", out), check=1)
+    assert "its folder" in proc.stderr and "no/such" in proc.stderr
+    assert "->" not in proc.stdout  # no frame was processed
+
+
+# --------------------------------------------------------------- no hangs
+
+def test_fifo_input_and_scene_do_not_hang(sss_cmd, blender_render,
+                                          tmp_path):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    out = tmp_path / "out.exr"
+    proc = subprocess.run([sss_cmd, str(fifo), "-o", str(out), "--scene",
+                           str(blender_render / "scene.json")],
+                          capture_output=True, text=True, timeout=HANG)
+    assert proc.returncode == 1 and "is a FIFO" in proc.stderr, proc.stderr
+    proc = subprocess.run([sss_cmd, str(blender_render / "render.exr"),
+                           "-o", str(out), "--scene", str(fifo)],
+                          capture_output=True, text=True, timeout=HANG)
+    assert proc.returncode == 2 and "pipe" in proc.stderr, proc.stderr
+    only(tmp_path, "pipe")
+
+
+def test_scene_from_a_pipe_and_not_from_a_device(sss_cmd, blender_render,
+                                                 tmp_path):
+    out = tmp_path / "out.exr"
+    scene = (blender_render / "scene.json").read_bytes()
+    proc = subprocess.run([sss_cmd, str(blender_render / "render.exr"), "-o",
+                           str(out), "--scene", "/dev/stdin"], input=scene,
+                          capture_output=True, timeout=HANG)
+    assert proc.returncode == 0, proc.stderr
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o2.exr", "--scene", "/dev/zero", check=2)
+    assert "/dev/zero: is a character device" in proc.stderr
+
+
+# ------------------------------------------------------------- numbers
+
+# Every number is the whole argument, range checked before it is narrowed:
+# no wrap-around (2^32 + 1 threads was 1), no trailing text, and --frames
+# names the limit it hits (a huge step overflowed and leaked).
+@pytest.mark.parametrize("option,value,needle", [
+    ("--threads", "4294967297", "must be 0..256"),
+    ("--threads", "4294967296", "must be 0..256"),
+    ("--threads", " 4", "must be 0..256"),
+    ("--threads", "4x", "must be 0..256"),
+    ("--threads", "", "must be 0..256"),
+    ("--samples", "4294967297", "must be 1..4096"),
+    ("--samples", "0x10", "must be 1..4096"),
+    ("--radius-scale", " 1", "must be a number"),
+    ("--max-size", "100x100junk", "each 1..1048576"),
+    ("--max-size", "100x", "each 1..1048576"),
+    ("--max-size", "x100", "each 1..1048576"),
+    ("--max-size", "-5x10", "each 1..1048576"),
+    ("--max-size", "2000000x10", "each 1..1048576"),
+    ("--max-size", "4294967297x4294967297", "each 1..1048576"),
+    ("--frames", "1-10x9223372036854775807", "0..99999999"),
+    ("--frames", "1-99999999999", "0..99999999"),
+    ("--frames", "1-2000000", "at most 1000000 frames"),
+    ("--frames", "1-600000,1-600000", "at most 1000000 frames"),
+    ("--frames", "5-1", "must not run backwards"),
+    ("--frames", "1-3x0", "step must be at least 1"),
+    ("--frames", "1,2,", "like 1-240"),
+    ("--frames", "-3", "like 1-240"),
+])
+def test_strict_numbers(sss_cmd, blender_render, tmp_path, option, value,
+                        needle):
+    scene = str(blender_render / "scene.json")
+    pattern = option == "--frames"
+    proc = run(sss_cmd, str(tmp_path / ("in_####.exr" if pattern else
+                                        "in.exr")),
+               "-o", str(tmp_path / ("out_####.exr" if pattern else
+                                     "out.exr")),
+               "--scene", scene, option, value, check=2)
+    assert needle in proc.stderr and value in proc.stderr, proc.stderr
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("option,value", [
+    ("--threads", "0"), ("--threads", "256"), ("--samples", "4096"),
+    ("--max-size", "1048576x1048576"), ("--frames", "0-99999999x99999999"),
+    ("--frames", "7,9,12-20x4")])
+def test_numbers_at_their_limits(sss_cmd, blender_render, tmp_path, option,
+                                 value):
+    """Accepted: the run goes on to the (missing) input, exit status 1."""
+    pattern = option == "--frames"
+    proc = run(sss_cmd, str(tmp_path / ("in_####.exr" if pattern else
+                                        "in.exr")),
+               "-o", str(tmp_path / "out_####.exr" if pattern else
+                         tmp_path / "out.exr"),
+               "--scene", str(blender_render / "scene.json"), option, value,
+               check=1)
+    assert "cannot open" in proc.stderr, proc.stderr
+
+
+def test_resume_after_a_killed_run(sss_cmd, blender_render, tmp_path):
+    """Killed mid-sequence: only complete frames exist (outputs appear by
+    rename), and --resume does the rest without redoing them."""
+    import signal
+    import time
+    src = blender_render / "render.exr"
+    for f in range(1, 41):
+        os.symlink(src, tmp_path / f"in_{f:04d}.exr")
+    args = [sss_cmd, tmp_path / "in_####.exr", "--frames", "1-40", "-o",
+            tmp_path / "out_####.exr", "--scene",
+            blender_render / "scene.json", "--method", "reference", "-q"]
+    proc = subprocess.Popen([str(a) for a in args])
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "out_0002.exr").exists():
+        assert time.monotonic() < deadline and proc.poll() is None
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = sorted(p.name for p in tmp_path.glob("out_*.exr"))
+    assert 2 <= len(done) < 40
+    for name in done:  # every output that exists is complete
+        ch, _ = read_channels(tmp_path / name)
+        assert "SSS.Combined.R" in ch
+    stamps = {n: (tmp_path / n).stat().st_mtime_ns for n in done}
+    # A temporary file of a process that is gone, as a kill can leave.
+    (tmp_path / ".out_0040.exr.tmp-999999999-1").write_bytes(b"partial")
+    proc = run(*args[:-1], "--resume", check=0)
+    assert not list(tmp_path.glob(".*tmp*")), "stale temporary kept"
+    assert f"{len(done)} skipped" in proc.stdout
+    assert len(list(tmp_path.glob("out_*.exr"))) == 40
+    for name, stamp in stamps.items():
+        assert (tmp_path / name).stat().st_mtime_ns == stamp
+
+
+def test_unwritable_output_and_full_disk(sss_cmd, blender_render, tmp_path):
+    """Output where nothing can be written, and a disk that fills up
+    mid-write (a file size limit): a clear error naming the output, no
+    partial file, the input untouched."""
+    import resource
+    src = tmp_path / "in.exr"
+    shutil.copy(blender_render / "render.exr", src)
+    before = src.read_bytes()
+    blocker = tmp_path / "not_a_dir"
+    blocker.write_text("x")
+    proc = run(sss_cmd, src, "-o", blocker / "out.exr", "--scene",
+               blender_render / "scene.json", check=1)
+    assert "out.exr" in proc.stderr
+    limit = 20000  # bytes: the output is larger, the write fails midway
+
+    def small_disk():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+        import signal
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+
+    out = tmp_path / "out.exr"
+    proc = subprocess.run([sss_cmd, str(src), "-o", str(out), "--scene",
+                           str(blender_render / "scene.json")],
+                          capture_output=True, text=True,
+                          preexec_fn=small_disk)
+    assert proc.returncode == 1, proc.stderr
+    assert "out.exr" in proc.stderr
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "in.exr", "not_a_dir"]
+    assert src.read_bytes() == before
+
+
+# ---------------------------------------------- signals and temporaries
+
+@pytest.fixture(scope="module")
+def big_render(blender_render, tmp_path_factory):
+    """The test render tiled to 512x512: a write that lasts long enough
+    to be interrupted."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    tiled = {k: np.tile(v, (8, 8)) for k, v in ch.items()}
+    path = tmp_path_factory.mktemp("big") / "big.exr"
+    write_channels(path, tiled, spec.width * 8, spec.height * 8,
+                   attributes={"cycles.ViewLayer.samples": "4"})
+    return path
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM,
+                                 signal.SIGHUP])
+def test_signal_mid_write_leaves_no_temporary(sss_cmd, blender_render,
+                                              big_render, tmp_path, sig):
+    out = tmp_path / "out.exr"
+    proc = subprocess.Popen([sss_cmd, *map(str, args_for(
+        blender_render, big_render, out, "--threads", "1", "-q"))])
+    deadline = time.monotonic() + HANG
+    while not list(tmp_path.glob(".out.exr.tmp-*")):
+        assert proc.poll() is None, "finished before its write was seen"
+        assert time.monotonic() < deadline
+        time.sleep(0.001)
+    proc.send_signal(sig)
+    assert proc.wait(timeout=HANG) == -sig
+    only(tmp_path)
+
+
+def test_long_output_name_cleans_its_own_stale_temporary(
+        sss_cmd, blender_render, tmp_path):
+    """Over 128 bytes the temporary's name is cut; the clean-up matches
+    the same cut name."""
+    name = "n" * 200 + ".exr"
+    stale = tmp_path / ("." + name[:128] + ".tmp-999999999-1")
+    stale.write_bytes(b"partial")
+    run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                           tmp_path / name), check=0)
+    only(tmp_path, name)
+
+
+def test_live_writers_temporary_is_never_deleted(sss_cmd, blender_render,
+                                                 tmp_path):
+    """Another writer (another host or PID namespace: its PID means
+    nothing here) holds the lock on its temporary; it is kept. An unlocked
+    one is stale and goes."""
+    live = tmp_path / ".out.exr.tmp-999999999-a1"
+    stale = tmp_path / ".out.exr.tmp-999999999-b2"
+    stale.write_bytes(b"left by a killed run")
+    with open(live, "wb") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                               tmp_path / "out.exr"), check=0)
+        assert live.exists()
+    assert not stale.exists()
+    only(tmp_path, "out.exr", live.name)
+
+
+def test_resume_redoes_broken_outputs(sss_cmd, blender_render, tmp_path):
+    src = blender_render / "render.exr"
+    for f in range(1, 5):
+        os.symlink(src, tmp_path / f"in_{f:04d}.exr")
+    base = [sss_cmd, tmp_path / "in_####.exr", "-o", tmp_path / "out_####.exr",
+            "--scene", blender_render / "scene.json", "--frames", "1-4"]
+    run(*base, check=0)
+    good = (tmp_path / "out_0004.exr").read_bytes()
+    stamp = (tmp_path / "out_0004.exr").stat().st_mtime_ns
+    (tmp_path / "out_0001.exr").write_bytes(b"")
+    (tmp_path / "out_0002.exr").write_bytes(good[:len(good) // 2])
+    shutil.copy(src, tmp_path / "out_0003.exr")  # an EXR, not an output
+    proc = run(*base, "--resume", check=0)
+    assert "1 skipped" in proc.stdout, proc.stdout
+    for f in (1, 2, 3):
+        assert f"out_{f:04d}.exr: exists but is not a complete output" in \
+            proc.stderr, proc.stderr
+        ch, _ = read_channels(tmp_path / f"out_{f:04d}.exr")
+        assert "SSS.Combined.R" in ch
+    assert (tmp_path / "out_0004.exr").stat().st_mtime_ns == stamp
+
+
+def test_report_to_a_full_device_fails(sss_cmd, blender_render, tmp_path):
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sss_cmd, *map(str, args_for(
+            blender_render, blender_render / "render.exr",
+            tmp_path / "out.exr"))], stdout=full, stderr=subprocess.PIPE,
+            text=True, timeout=HANG)
+    assert proc.returncode == 1 and "standard output" in proc.stderr
+
+
+# ------------------------------------------------------- silent physics
+
+def test_cycles_render_without_diffind_is_refused(sss_cmd, blender_render,
+                                                  tmp_path):
+    """Cycles always can write DiffInd; without it the indirect diffuse
+    light would vanish from the result. EEVEE has no such pass: fine."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    without = {k: v for k, v in ch.items() if ".DiffInd." not in k}
+    cycles = tmp_path / "cycles.exr"
+    write_channels(cycles, without, spec.width, spec.height,
+                   attributes={"cycles.ViewLayer.samples": "4"})
+    proc = run(sss_cmd, *args_for(blender_render, cycles,
+                                  tmp_path / "o1.exr"), check=1)
+    assert "Cycles render without a DiffInd pass" in proc.stderr
+    assert "cycles.exr" in proc.stderr
+    eevee = tmp_path / "eevee.exr"
+    write_channels(eevee, without, spec.width, spec.height)
+    run(sss_cmd, *args_for(blender_render, eevee, tmp_path / "o2.exr"),
+        check=0)
+
+
+def scattered_change(path):
+    ch, _ = read_channels(path)
+    light = pass_rgb(ch, "SSS.DiffLight")
+    return light, np.abs(light - pass_rgb(ch, "ViewLayer.DiffDir") -
+                         pass_rgb(ch, "ViewLayer.DiffInd")).max()
+
+
+@pytest.mark.parametrize("method", ["separable", "separable-exact", "disk",
+                                    "reference"])
+def test_absurd_radii_follow_one_rule(sss_cmd, blender_render, tmp_path,
+                                      method):
+    """Every method scatters at absurd radii and reaches its limit: the
+    result no longer changes (some returned the input before)."""
+    lights = []
+    for scale in ("1e12", "1e30"):
+        out = tmp_path / f"out_{scale}.exr"
+        run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                               out, "--method", method, "--radius-scale",
+                               scale), check=0)
+        light, change = scattered_change(out)
+        assert change > 0.05, (scale, change)
+        lights.append(light)
+    assert np.array_equal(lights[0], lights[1])
+    scene = json.loads((blender_render / "scene.json").read_text())
+    scene["materials"][0]["radius"] = [1e30, 1e30, 1e30]
+    (tmp_path / "huge.json").write_text(json.dumps(scene))
+    out = tmp_path / "scene_huge.exr"
+    run(sss_cmd, blender_render / "render.exr", "-o", out, "--scene",
+        tmp_path / "huge.json", "--method", method, check=0)
+    assert scattered_change(out)[1] > 0.05
+
+
+# -------------------------------------------------------------- messages
+
+def test_empty_output_is_a_usage_error(sss_cmd, blender_render, tmp_path):
+    proc = run(sss_cmd, blender_render / "render.exr", "-o", "", "--scene",
+               blender_render / "scene.json", check=2)
+    assert "-o OUTPUT is empty" in proc.stderr
+
+
+def test_too_long_path_is_named(sss_cmd, blender_render, tmp_path):
+    out = str(tmp_path) + "/" + "d" * 5000 + ".exr"
+    proc = run(sss_cmd, blender_render / "render.exr", "-o", out, "--scene",
+               blender_render / "scene.json", check=1)
+    assert "longer than 4095 bytes" in proc.stderr
+    assert out[:80] in proc.stderr
+
+
+def test_blender5_multi_part_render(sss_cmd, tmp_path):
+    """Blender 5.0 writes a part per pass; every part is read."""
+    src = os.path.join(os.path.dirname(__file__), "..", "fuzz", "corpus",
+                       "exr", "blender5_render_float_zip.exr")
+    scene = tmp_path / "s.json"
+    scene.write_text(json.dumps({"version": 1, "materials": [
+        {"pass_index": 1, "profile": "burley", "radius": [1, 0.5, 0.25]}]}))
+    out = tmp_path / "out.exr"
+    run(sss_cmd, src, "-o", out, "--scene", scene, check=0)
+    assert "SSS.Combined.R" in read_channels(out)[0]
