@@ -17,16 +17,16 @@ if "bpy" in locals():
     import importlib
     for _m in (blender_compat, native, analysis,  # noqa: F821
                switch_off, nodes, pipeline,  # noqa: F821
-               properties, presets, operators, ui, handlers):  # noqa: F821
+               properties, presets, operators, ui, render_flow):  # noqa: F821
         importlib.reload(_m)
 
 import bpy  # noqa: E402,F401
 
-from . import (analysis, blender_compat, handlers, native,  # noqa: E402
-               nodes, operators, pipeline, presets, properties, switch_off,
-               ui)
+from . import (analysis, blender_compat, native, nodes,  # noqa: E402
+               operators, pipeline, presets, properties, render_flow,
+               switch_off, ui)
 
-_modules = (properties, presets, operators, ui, handlers)
+_modules = (properties, presets, operators, ui, render_flow)
 
 
 def register():

@@ -22,6 +22,8 @@ add-on's, so scripts and tests can import it on its own.
 - Material.use_nodes and Scene.use_nodes are going away (5.0 warns).
 - Image formats: 5.0 chooses a multilayer EXR by media type
   (MULTI_LAYER_IMAGE) before the file format.
+- File Output nodes: base_path and file_slots up to 4.x; in 5.0 directory,
+  file_name and file_output_items (set_file_output, file_output_inputs).
 """
 import os
 from dataclasses import dataclass
@@ -304,6 +306,15 @@ def compositor_tree(scene, create=False):
     return scene.node_tree if scene.use_nodes or create else None
 
 
+def remove_compositor(scene, tree):
+    """Undoes compositor_tree(scene, create=True)."""
+    if COMPOSITOR_IS_GROUP:
+        scene.compositing_node_group = None
+        bpy.data.node_groups.remove(tree)
+    else:
+        scene.use_nodes = False
+
+
 def composite_input(tree, create=True, location=(0.0, 0.0)):
     """The socket whose image is the composite: the Composite node's Image
     input (made if missing and create), or in 5.0 the group output's
@@ -319,6 +330,32 @@ def composite_input(tree, create=True, location=(0.0, 0.0)):
         if COMPOSITOR_IS_GROUP and not tree.interface.items_tree:
             new_group_socket(tree, 'OUTPUT', "NodeSocketColor", "Image")
     return node.inputs[0]
+
+
+def set_file_output(node, directory, file_format="PNG", depth="8"):
+    """A File Output node writing file_format images into directory."""
+    if VERSION >= (5, 0, 0):
+        node.directory = directory
+        node.file_name = ""
+        node.format.media_type = 'IMAGE'
+    else:
+        node.base_path = directory
+    node.format.file_format = file_format
+    node.format.color_depth = depth
+
+
+def file_output_inputs(node, names):
+    """Replaces the node's inputs by one image input per name (each
+    written to a file named after it); returns them."""
+    if VERSION >= (5, 0, 0):
+        node.file_output_items.clear()
+        for name in names:
+            node.file_output_items.new('RGBA', name)
+    else:
+        node.file_slots.clear()
+        for name in names:
+            node.file_slots.new(name)
+    return [node.inputs[name] for name in names]
 
 
 def blender_command():

@@ -181,10 +181,11 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
         name="Output Folder", subtype="DIR_PATH", default="",
         description="Where passes and results go (empty: a temporary "
         "folder)")
-    use_animation: BoolProperty(
-        name="Apply to Animation Renders", default=False,
-        description="Render Animation (and blender -b -a) renders with "
-        "material SSS off and writes each frame's SSS result beside it")
+    enabled: BoolProperty(
+        name="Screen-space SSS", default=False,
+        description="Renders of this scene (blender -b -f/-a, scripts) "
+        "scatter every frame: rendered with material SSS off, the frames, "
+        "File Output nodes and Render Result show the result with SSS")
     transmission_layer: EnumProperty(
         name="Back-Light Layer", items=BACKLIGHT_LAYER, default="AUTO",
         description="The extra view layer that measures light arriving "

@@ -179,7 +179,7 @@ class SSS_PT_node_main(bpy.types.Panel):
         col.prop(s, "taps")
         col.prop(s, "radius_scale")
         _prop(col, s, "output_dir", False)
-        col.prop(s, "use_animation")
+        col.prop(s, "enabled")
         _draw_backlight(layout, context, scene)
 
         col = layout.column(align=True)
@@ -281,7 +281,30 @@ class SSS_PT_material(bpy.types.Panel):
         draw_material_settings(self.layout, context, context.material)
 
 
+class SSS_PT_render(bpy.types.Panel):
+    """The scene's switch where renders are set up."""
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "render"
+    bl_label = "Screen-Space SSS"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "sss", None) is not None
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.sss, "enabled", text="")
+
+    def draw(self, context):
+        s = context.scene.sss
+        col = self.layout.column()
+        col.active = s.enabled
+        _prop(col, s, "method", False)
+        col.prop(s, "radius_scale")
+
+
 classes = (SSS_PT_node_main, SSS_PT_node_found, SSS_PT_node_material,
-           SSS_PT_material)
+           SSS_PT_material, SSS_PT_render)
 
 register, unregister = bpy.utils.register_classes_factory(classes)

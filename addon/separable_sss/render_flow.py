@@ -1,0 +1,353 @@
+"""SSS inside Blender's own render flow. With "Screen-space SSS" on for the
+scene (Scene.sss.enabled), a render that runs on the main thread
+(`blender -b shot.blend -f N`, `-a`, bpy.ops.render.render() from a
+script) is scattered frame by frame, and Blender writes the frames, the
+File Output nodes and the Render Result from the scattered image, in the
+scene's own format and colour management.
+
+Blender has no hook between rendering and compositing and runs no Python
+inside the compositor, so:
+
+- render_init: a copy of the scene (it shares the objects, materials and
+  camera) is made to render the passes; in the scene's compositor every
+  Render Layers node of the scene is muted and what it fed is fed from
+  Image nodes reading the library's result for its view layer (the SSS
+  layer's Combined and Alpha for Image and Alpha, the layer's own passes
+  for the rest). A compositor without a live Render Layers node makes
+  Blender's render of the scene a compositing-only one.
+- render_pre, per frame: the scene is described at that frame (animated
+  camera, radius, strength), the copy renders the frame's passes with
+  material SSS switched off (and the back-light layer where transmission
+  needs it), and the library scatters every view layer the compositor
+  shows; the Image nodes read that frame's files.
+- render_complete, render_cancel: the compositor, the materials and the
+  scene are as before; the copy and the temporary files are removed.
+- A frame that cannot be scattered stops the job: the message names the
+  frame (and the pass), everything is restored and `blender -b` exits with
+  status 1; no frame is written without SSS as if it had it.
+
+Interactive F12 renders in a job thread, where a second render cannot
+start: there the flow stands aside (and says so) and Render with SSS is
+the way."""
+import os
+import shutil
+import sys
+import tempfile
+import threading
+
+import bpy
+from bpy.app.handlers import persistent
+
+from . import blender_compat as compat
+from . import nodes, pipeline
+from .switch_off import TAG, _Undo, switched_off
+
+# The render in progress, per scene name (handlers get nothing else).
+_flows = {}
+# Under blender -b a failed frame ends the process with status 1: Blender
+# offers Python no other way to fail a render job.
+EXIT_ON_FAILURE = bpy.app.background
+# Copies whose render has ended: removing a scene inside a render handler
+# crashes Blender, so they go at the next chance (see remove_leftovers).
+_leftovers = []
+
+
+def _say(scene, text):
+    print(f"SSS: {scene.name}: {text}", flush=True)
+
+
+def enabled(scene):
+    return getattr(scene, "sss", None) is not None and scene.sss.enabled
+
+
+class Flow:
+    """One render of one scene with SSS: its copy, its files, its changes
+    to the compositor (undone by close)."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.copy = None
+        self.folder = tempfile.mkdtemp(prefix="render-",
+                                       dir=pipeline.output_dir(scene))
+        self.tree_undo = _Undo()
+        self.layers = []     # view layer names the compositor shows
+        self.images = {}     # view layer name -> its result image
+        self.done = set()    # frames already scattered
+
+    # -- files
+    def passes_path(self, frame):
+        return os.path.join(self.folder, f"passes_{frame:04d}.exr")
+
+    def result_path(self, layer, frame):
+        return os.path.join(self.folder,
+                            f"{pipeline._safe(layer)}_{frame:04d}.exr")
+
+    # -- set-up
+    def open(self):
+        scene = self.scene
+        pipeline._check_scene(scene)
+        pipeline._check_library()
+        copy = scene.copy()
+        copy.name = f"{scene.name} (SSS passes)"
+        self.copy = copy
+        copy.render.use_compositing = False
+        copy.render.use_sequencer = False
+        compat.set_multilayer_exr(copy.render.image_settings)
+        self.tree_undo.set(scene.render, "use_compositing", True)
+        tree = compat.compositor_tree(scene)
+        if tree is None:  # Blender's default: Render Layers to Composite
+            tree = compat.compositor_tree(scene, create=True)
+            self.tree_undo.add(lambda: compat.remove_compositor(scene, tree))
+        self.tree = tree
+        self.render_layers = [
+            n for n in tree.nodes
+            if n.bl_idname == "CompositorNodeRLayers" and not n.mute and
+            (n.scene is None or n.scene == scene)]
+        self.layers = sorted({n.layer for n in self.render_layers})
+        if not self.layers:
+            raise pipeline.SSSError("the compositor shows no view layer of "
+                                    "this scene")
+        self.frame(scene.frame_current)
+        for node in self.render_layers:
+            self._rewire(node)
+        self._follow_old_setup()
+
+    def _follow_old_setup(self):
+        """Render with SSS's result node, if one is left in the tree,
+        shows this render's result too, never an old one."""
+        node = nodes.find_result(self.scene)
+        if node is None:
+            return
+        view_layer = bpy.context.view_layer
+        layer = view_layer.name if view_layer and \
+            view_layer.name in self.layers else self.layers[0]
+        old = (node.image, node.layer if node.image else None,
+               node.frame_start, node.frame_offset, node.frame_duration)
+
+        def restore(n=node, o=old):
+            n.image = o[0]
+            if o[1]:
+                n.layer = o[1]
+            n.frame_start, n.frame_offset, n.frame_duration = o[2:]
+        self.tree_undo.add(restore)
+        node.image = self.images[layer]
+        node.layer = "SSS"
+        self._follow_frames(node)
+
+    def _result_nodes(self, node):
+        """Two Image nodes on the layer's result: its SSS layer and its
+        own passes."""
+        tree, undo = self.tree, self.tree_undo
+        image = self.images.get(node.layer)
+        if image is None:
+            path = self.result_path(node.layer, self.scene.frame_current)
+            image = bpy.data.images.load(path, check_existing=False)
+            image.source = 'SEQUENCE'
+            self.images[node.layer] = image
+        made = []
+        for dy, layer in ((0, "SSS"), (-260, node.layer)):
+            im = tree.nodes.new("CompositorNodeImage")
+            undo.add(lambda im=im: tree.nodes.remove(im))
+            im.label = TAG
+            im.image = image
+            im.location = (node.location.x, node.location.y + dy)
+            im.layer = layer
+            self._follow_frames(im)
+            made.append(im)
+        return made
+
+    def _follow_frames(self, node):
+        """The Image node reads the file numbered as the scene's frame."""
+        start = min(self.scene.frame_start, self.scene.frame_current, 1)
+        node.frame_start = start
+        node.frame_offset = start - 1
+        node.frame_duration = 1048574 - start
+
+    def _rewire(self, node):
+        tree, undo = self.tree, self.tree_undo
+        sss, own = self._result_nodes(node)
+        for link in list(tree.links):
+            if link.from_node != node:
+                continue
+            name, target = link.from_socket.name, link.to_socket
+            if name in ("Image", "Alpha"):
+                source = sss.outputs.get("Combined" if name == "Image"
+                                         else "Alpha")
+            else:
+                source = own.outputs.get(name)
+            original = link.from_socket
+            tree.links.remove(link)
+            undo.add(lambda o=original, t=target: tree.links.new(o, t))
+            if source is None:
+                _say(self.scene, f"the compositor's {name} of view layer "
+                     f"{node.layer} is not in the result; left unlinked")
+                continue
+            new = tree.links.new(source, target)
+            undo.add(lambda n=new: tree.links.remove(n))
+        undo.set(node, "mute", True)
+
+    # -- per frame
+    def frame(self, frame):
+        """Renders the frame's passes with SSS off and scatters every
+        shown view layer into its result file."""
+        if frame in self.done:
+            return
+        scene, copy = self.scene, self.copy
+        # Blender updates the original data (what the description reads:
+        # camera, radii, strengths) only after render_pre: evaluate the
+        # frame now, for both scenes.
+        scene.frame_set(frame)
+        copy.frame_set(frame)
+        found = pipeline.analyse(scene)
+        desc = os.path.join(self.folder, f"scene_{frame:04d}.json")
+        with switched_off(copy, found):
+            if os.environ.get("SSS_TEST_FAIL") == "pass":
+                for layer in copy.view_layers:  # a real missing pass
+                    layer.use_pass_diffuse_color = False
+            pipeline.write_description(scene, found, desc)
+            copy.render.filepath = self.passes_path(frame)
+            status = bpy.ops.render.render(write_still=True,
+                                           scene=copy.name)
+        passes = self.passes_path(frame)
+        if status != {'FINISHED'} or not os.path.exists(passes):
+            raise pipeline.SSSError(f"frame {frame}: the passes were not "
+                                    "rendered")
+        for layer in self.layers:
+            job = pipeline.Job(passes, self.result_path(layer, frame), desc,
+                               layer, scene.sss.radius_scale)
+            try:
+                pipeline.scatter(job)
+            except pipeline.SSSError as e:
+                raise pipeline.SSSError(f"frame {frame}: {e}") from None
+            _say(scene, f"frame {frame}, view layer {layer}: "
+                 f"{pipeline.timings_text(job)}")
+        os.remove(passes)
+        for old in self.done:
+            for layer in self.layers:
+                _remove(self.result_path(layer, old))
+        self.done = {frame}
+
+    # -- tear-down
+    def close(self):
+        errors = self.tree_undo.run()
+        for image in self.images.values():
+            try:
+                bpy.data.images.remove(image)
+            except ReferenceError:  # already gone
+                pass
+        if self.copy is not None and self.copy.name in bpy.data.scenes:
+            _leftovers.append(self.copy.name)
+        shutil.rmtree(self.folder, ignore_errors=True)
+        if errors:
+            _say(self.scene, "could not restore the compositor exactly: " +
+                 "; ".join(errors))
+
+
+def _remove(path):
+    try:
+        os.remove(path)
+    except OSError:
+        pass
+
+
+def _fail(scene, flow, error):
+    """Stops the job: restored first, then under -b the process exits."""
+    _flows.pop(scene.name, None)
+    _say(scene, f"error: {error}")
+    flow.close()
+    if EXIT_ON_FAILURE:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(1)
+    raise pipeline.SSSError(str(error))
+
+
+def _ours(scene):
+    return any(f.copy is not None and f.copy.name == scene.name
+               for f in _flows.values())
+
+
+@persistent
+def on_init(scene, *_):
+    if not enabled(scene) or scene.name in _flows or _ours(scene):
+        return
+    if threading.current_thread() is not threading.main_thread():
+        _say(scene, "an interactive render (F12) renders without "
+             "screen-space SSS; use Render with SSS, or render with "
+             "blender -b")
+        return
+    if not pipeline.analyse(scene).found:
+        _say(scene, "no material scatters; the render is left alone")
+        return
+    try:
+        flow = Flow(scene)
+    except pipeline.SSSError as e:
+        _say(scene, f"error: {e}")
+        if EXIT_ON_FAILURE:
+            sys.stdout.flush()
+            os._exit(1)
+        raise
+    _flows[scene.name] = flow
+    try:
+        flow.open()
+    except Exception as e:  # noqa: BLE001 - every failure stops the job
+        _fail(scene, flow, e)
+
+
+@persistent
+def on_pre(scene, *_):
+    flow = _flows.get(scene.name)
+    if flow is None:
+        return
+    try:
+        flow.frame(scene.frame_current)
+    except Exception as e:  # noqa: BLE001
+        _fail(scene, flow, e)
+
+
+@persistent
+def on_end(scene, *_):
+    flow = _flows.pop(scene.name, None)
+    if flow is not None:
+        flow.close()
+        if not bpy.app.background:
+            bpy.app.timers.register(remove_leftovers, first_interval=0.1)
+
+
+@persistent
+def remove_leftovers(*_):
+    """Removes the copies of renders that have ended (never saved with
+    the file: this runs before every save, too)."""
+    if _flows:
+        return 0.5  # a render is running: later
+    while _leftovers:
+        scene = bpy.data.scenes.get(_leftovers.pop())
+        if scene is not None:
+            bpy.data.scenes.remove(scene)
+    return None
+
+
+@persistent
+def on_load(*_):
+    """A new file: the old file's copies went with it."""
+    _leftovers.clear()
+
+
+HANDLERS = ((bpy.app.handlers.render_init, on_init),
+            (bpy.app.handlers.render_pre, on_pre),
+            (bpy.app.handlers.render_complete, on_end),
+            (bpy.app.handlers.render_cancel, on_end),
+            (bpy.app.handlers.save_pre, remove_leftovers),
+            (bpy.app.handlers.load_pre, on_load))
+
+
+def register():
+    for handlers, fn in HANDLERS:
+        if fn not in handlers:
+            handlers.append(fn)
+
+
+def unregister():
+    for handlers, fn in HANDLERS:
+        if fn in handlers:
+            handlers.remove(fn)

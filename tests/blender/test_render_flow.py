@@ -1,0 +1,201 @@
+"""SSS inside Blender's render flow (render_flow.py): with the scene's
+switch on, an ordinary render writes the scattered image, every frame of
+an animation its own, File Output nodes and every view layer included; a
+frame that fails fails the job; with the switch off nothing changes."""
+import glob
+import os
+import subprocess
+
+import bpy
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from helpers import BLENDER, ROOT, build_blend, compat, diff, load_addon, \
+    snapshot
+
+separable_sss = load_addon()
+from separable_sss import pipeline, render_flow  # noqa: E402
+
+from exr import read_channels  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    separable_sss.register()
+    yield
+    separable_sss.unregister()
+
+
+@pytest.fixture(scope="module")
+def blend(tmp_path_factory):
+    return build_blend("two", str(tmp_path_factory.mktemp("blends") /
+                                  "two.blend"), size=48, samples=4)
+
+
+def open_scene(path, out_dir):
+    """The scene with a PNG output whose pixels are the linear image
+    through the plain sRGB curve (no dither, Standard view)."""
+    bpy.ops.wm.open_mainfile(filepath=path)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(out_dir)
+    scene.render.image_settings.file_format = 'PNG'
+    scene.render.image_settings.color_depth = '16'
+    scene.render.image_settings.color_mode = 'RGB'
+    scene.render.dither_intensity = 0.0
+    scene.view_settings.view_transform = 'Standard'
+    scene.view_settings.look = 'None'
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    return scene
+
+
+def srgb(linear):
+    x = np.clip(linear, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x,
+                    1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def png(path):
+    """The file's own values in [0, 1] (Blender would linearise them)."""
+    buf = oiio.ImageBuf(str(path))
+    assert not buf.has_error, buf.geterror()
+    return buf.get_pixels(oiio.FLOAT)[:, :, :3]
+
+
+def expected(scene):
+    """What the SSS pipeline gives for the current frame (the operator's
+    own path: render with SSS off, then the library), as the PNG holds it."""
+    job = pipeline.prepare_render(bpy.context)
+    pipeline.scatter(job)
+    ch, _ = read_channels(job.output_exr)
+    rgb = np.stack([ch[f"SSS.Combined.{c}"] for c in "RGB"], axis=-1)
+    return srgb(rgb)
+
+
+def render_still(scene, path):
+    scene.render.filepath = str(path)
+    assert bpy.ops.render.render(write_still=True) == {'FINISHED'}
+    render_flow.remove_leftovers()
+    return png(str(path) + ".png")
+
+
+def test_still_render_is_the_sss_result(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    want = expected(scene)
+    scene.render.filepath = str(tmp_path / "still")
+    before = snapshot(scene)
+    scene.sss.enabled = True
+    got = render_still(scene, tmp_path / "still")
+    assert np.abs(got - want).max() <= 1.5 / 255
+    scene.sss.enabled = False
+    assert diff(before, snapshot(scene)) == []
+    assert [s.name for s in bpy.data.scenes] == [scene.name]
+    plain = render_still(scene, tmp_path / "plain")
+    assert np.abs(plain - want).max() > 4 / 255  # SSS shows
+
+
+def test_render_with_sss_setup_never_shows_an_old_result(blend, tmp_path):
+    """Render with SSS leaves its result node in the compositor; a later
+    render with the switch on shows the new frame, not that old result."""
+    scene = open_scene(blend, tmp_path)
+    assert bpy.ops.sss.render() == {'FINISHED'}
+    scene.camera.data.lens *= 1.5
+    scene.sss.output_dir = str(tmp_path / "new")  # the old file stays
+    want = expected(scene)
+    scene.sss.enabled = True
+    got = render_still(scene, tmp_path / "still")
+    assert np.abs(got - want).max() <= 1.5 / 255
+
+
+def test_switch_off_is_plain_cycles(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    with_addon = render_still(scene, tmp_path / "a")
+    render_flow.unregister()
+    try:
+        without = render_still(scene, tmp_path / "b")
+    finally:
+        render_flow.register()
+    assert np.array_equal(with_addon, without)
+
+
+def test_file_output_and_second_view_layer(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    scene.view_layers.new("Second")
+    want = expected(scene)
+    tree = compat.compositor_tree(scene, create=True)
+    first = next(n for n in tree.nodes
+                 if n.bl_idname == "CompositorNodeRLayers")
+    second = tree.nodes.new("CompositorNodeRLayers")
+    second.layer = "Second"
+    out = tree.nodes.new("CompositorNodeOutputFile")
+    compat.set_file_output(out, str(tmp_path / "fo"), "PNG", '16')
+    sockets = compat.file_output_inputs(out, ["first", "second"])
+    tree.links.new(first.outputs["Image"], sockets[0])
+    tree.links.new(second.outputs["Image"], sockets[1])
+    scene.sss.enabled = True
+    render_still(scene, tmp_path / "still")
+    for name in ("first", "second"):
+        files = glob.glob(str(tmp_path / "fo" / f"{name}*.png"))
+        assert len(files) == 1, os.listdir(tmp_path / "fo")
+        got = png(files[0])
+        assert np.abs(got - want).max() <= 1.5 / 255, name
+
+
+def test_failed_frame_restores_and_reports(blend, tmp_path, monkeypatch):
+    """In a session the frame's error is raised (Blender reports it) and
+    the scene is as before; under -b the job exits 1 (next test)."""
+    scene = open_scene(blend, tmp_path)
+    before = snapshot(scene)
+    scene.sss.enabled = True
+    monkeypatch.setenv("SSS_TEST_FAIL", "pass")
+    monkeypatch.setattr(render_flow, "EXIT_ON_FAILURE", False)
+    bpy.ops.render.render(write_still=False)
+    render_flow.remove_leftovers()
+    scene.sss.enabled = False
+    assert diff(before, snapshot(scene)) == []
+    assert [s.name for s in bpy.data.scenes] == [scene.name]
+
+
+def run_blender(path, *args, env=None):
+    enable = ("import sys; sys.path.insert(0, %r); import separable_sss; "
+              "separable_sss.register(); import bpy; "
+              "bpy.context.scene.sss.enabled = True"
+              % os.path.join(ROOT, "addon"))
+    return subprocess.run([BLENDER, "-b", path, "--python-expr", enable,
+                           *args], capture_output=True, text=True,
+                          timeout=900, env={**os.environ, **(env or {})})
+
+
+def test_animation_follows_the_camera_per_frame(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    cam = scene.camera.data
+    scene.frame_start, scene.frame_end = 1, 3
+    for f, lens in ((1, 40.0), (3, 70.0)):
+        cam.lens = lens
+        cam.keyframe_insert("lens", frame=f)
+    scene.render.filepath = str(tmp_path / "frame_####")
+    path = str(tmp_path / "anim.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    proc = run_blender(path, "-a")
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+    frames = []
+    for f in (1, 2, 3):
+        scene.frame_set(f)
+        want = expected(scene)
+        got = png(tmp_path / f"frame_{f:04d}.png")
+        assert np.abs(got - want).max() <= 1.5 / 255, f
+        frames.append(got)
+    assert np.abs(frames[0] - frames[2]).max() > 0.05  # the lens moved
+
+
+def test_failed_frame_fails_blender_b(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    scene.render.filepath = str(tmp_path / "frame_####")
+    path = str(tmp_path / "fail.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    proc = run_blender(path, "-f", "1", env={"SSS_TEST_FAIL": "pass"})
+    assert proc.returncode != 0
+    assert "DiffCol" in proc.stdout and "frame 1" in proc.stdout, \
+        proc.stdout[-2000:]
+    assert not (tmp_path / "frame_0001.png").exists()
