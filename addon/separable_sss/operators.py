@@ -9,8 +9,9 @@ import threading
 import time
 
 import bpy
+from bpy.props import BoolProperty
 
-from . import nodes, pipeline
+from . import nodes, pipeline, render_flow
 
 # Only one run at a time: its worker thread, alive while the library runs
 # (also after an Esc, until the library returns).
@@ -314,7 +315,59 @@ class SSS_OT_assign_pass_indices(bpy.types.Operator):
         return {'FINISHED'}
 
 
-classes = (SSS_OT_render, SSS_OT_apply, SSS_OT_remove_setup,
-           SSS_OT_assign_pass_indices)
+class SSS_OT_render_frame(bpy.types.Operator):
+    """Render the active scene (F12; Ctrl F12: the animation). With the
+    scene's Screen-space SSS on, the render runs in the foreground so that
+    it can be scattered; otherwise it is Blender's own render"""
+    bl_idname = "sss.render_frame"
+    bl_label = "Render"
+    bl_options = {'REGISTER'}
 
-register, unregister = bpy.utils.register_classes_factory(classes)
+    animation: BoolProperty(name="Animation", default=False)
+
+    def execute(self, context):
+        scene = context.scene
+        if not render_flow.enabled(scene):
+            return bpy.ops.render.render('INVOKE_DEFAULT', use_viewport=True,
+                                         animation=self.animation)
+        render_flow.last_error = None
+        status = bpy.ops.render.render('EXEC_DEFAULT',
+                                       animation=self.animation,
+                                       write_still=False)
+        render_flow.remove_leftovers()
+        if render_flow.last_error:
+            self.report({'ERROR'}, _one_line(render_flow.last_error))
+            return {'CANCELLED'}
+        if context.window is not None and not bpy.app.background:
+            bpy.ops.render.view_show('INVOKE_DEFAULT')
+        return status
+
+
+classes = (SSS_OT_render, SSS_OT_apply, SSS_OT_remove_setup,
+           SSS_OT_assign_pass_indices, SSS_OT_render_frame)
+
+_register_classes, _unregister_classes = \
+    bpy.utils.register_classes_factory(classes)
+_keymap_items = []
+
+
+def register():
+    _register_classes()
+    # F12 and Ctrl F12 through the operator above, where Blender has a
+    # window (no key configuration exists under blender -b).
+    kc = bpy.context.window_manager.keyconfigs.addon
+    if kc is None:
+        return
+    km = kc.keymaps.new(name="Screen", space_type='EMPTY')
+    for ctrl in (False, True):
+        item = km.keymap_items.new("sss.render_frame", 'F12', 'PRESS',
+                                   ctrl=ctrl)
+        item.properties.animation = ctrl
+        _keymap_items.append((km, item))
+
+
+def unregister():
+    for km, item in _keymap_items:
+        km.keymap_items.remove(item)
+    _keymap_items.clear()
+    _unregister_classes()

@@ -26,9 +26,10 @@ inside the compositor, so:
   frame (and the pass), everything is restored and `blender -b` exits with
   status 1; no frame is written without SSS as if it had it.
 
-Interactive F12 renders in a job thread, where a second render cannot
-start: there the flow stands aside (and says so) and Render with SSS is
-the way."""
+Blender's own F12 renders in a job thread, where a second render cannot
+start: the add-on binds F12 and Ctrl F12 to sss.render_frame, which with
+the switch on renders in the foreground (operators.py); a render job that
+starts anyway is left alone, and says so."""
 import os
 import shutil
 import sys
@@ -44,6 +45,8 @@ from .switch_off import TAG, _Undo, switched_off
 
 # The render in progress, per scene name (handlers get nothing else).
 _flows = {}
+# The last failure, for the operator that started the render.
+last_error = None
 # Under blender -b a failed frame ends the process with status 1: Blender
 # offers Python no other way to fail a render job.
 EXIT_ON_FAILURE = bpy.app.background
@@ -73,6 +76,8 @@ class Flow:
         self.layers = []     # view layer names the compositor shows
         self.images = {}     # view layer name -> its result image
         self.done = set()    # frames already scattered
+        self.failed = False
+        self.render_layers = []
 
     # -- files
     def passes_path(self, frame):
@@ -227,6 +232,16 @@ class Flow:
                 _remove(self.result_path(layer, old))
         self.done = {frame}
 
+    def blank(self):
+        """After a failure: the compositor gets nothing from this scene's
+        view layers for the rest of the render."""
+        self.failed = True
+        for node in self.render_layers:
+            if not node.mute:
+                self.tree_undo.set(node, "mute", True)
+        for image in self.images.values():
+            image.filepath = os.path.join(self.folder, "failed_####.exr")
+
     # -- tear-down
     def close(self):
         errors = self.tree_undo.run()
@@ -251,15 +266,22 @@ def _remove(path):
 
 
 def _fail(scene, flow, error):
-    """Stops the job: restored first, then under -b the process exits."""
-    _flows.pop(scene.name, None)
+    """Stops the job. Under -b: everything restored, then the process
+    exits with status 1. In a session (Blender offers no way to cancel a
+    render from Python) the rest of the render composites nothing, so no
+    frame passes for a scattered one, and the operator reports the error;
+    the end of the render restores everything."""
+    global last_error
+    last_error = error
     _say(scene, f"error: {error}")
-    flow.close()
-    if EXIT_ON_FAILURE:
+    if flow is None or EXIT_ON_FAILURE:
+        if flow is not None:
+            _flows.pop(scene.name, None)
+            flow.close()
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(1)
-    raise pipeline.SSSError(str(error))
+    flow.blank()
 
 
 def _ours(scene):
@@ -269,24 +291,22 @@ def _ours(scene):
 
 @persistent
 def on_init(scene, *_):
+    global last_error
     if not enabled(scene) or scene.name in _flows or _ours(scene):
         return
     if threading.current_thread() is not threading.main_thread():
-        _say(scene, "an interactive render (F12) renders without "
-             "screen-space SSS; use Render with SSS, or render with "
-             "blender -b")
+        _say(scene, "a render job in the background cannot be scattered "
+             "(a second render cannot start there); render with F12 from "
+             "the add-on's key binding, Render with SSS or blender -b")
         return
+    last_error = None
     if not pipeline.analyse(scene).found:
         _say(scene, "no material scatters; the render is left alone")
         return
     try:
         flow = Flow(scene)
     except pipeline.SSSError as e:
-        _say(scene, f"error: {e}")
-        if EXIT_ON_FAILURE:
-            sys.stdout.flush()
-            os._exit(1)
-        raise
+        return _fail(scene, None, e)
     _flows[scene.name] = flow
     try:
         flow.open()
@@ -297,7 +317,7 @@ def on_init(scene, *_):
 @persistent
 def on_pre(scene, *_):
     flow = _flows.get(scene.name)
-    if flow is None:
+    if flow is None or flow.failed:
         return
     try:
         flow.frame(scene.frame_current)

@@ -108,6 +108,22 @@ def test_render_with_sss_setup_never_shows_an_old_result(blend, tmp_path):
     assert np.abs(got - want).max() <= 1.5 / 255
 
 
+def test_transmission_as_for_stills(tmp_path):
+    """A back-lit slab: the render's copy gets the back-light layer as the
+    still pipeline does, and the frame is that pipeline's result."""
+    slab = build_blend("slab", str(tmp_path / "slab.blend"), size=40,
+                       samples=16)
+    scene = open_scene(slab, tmp_path)
+    want = expected(scene)
+    scene.sss.transmission_layer = 'NEVER'
+    without = expected(scene)
+    scene.sss.transmission_layer = 'AUTO'
+    assert np.abs(want - without).max() > 4 / 255  # transmission shows
+    scene.sss.enabled = True
+    got = render_still(scene, tmp_path / "still")
+    assert np.abs(got - want).max() <= 1.5 / 255
+
+
 def test_switch_off_is_plain_cycles(blend, tmp_path):
     scene = open_scene(blend, tmp_path)
     with_addon = render_still(scene, tmp_path / "a")
@@ -143,18 +159,32 @@ def test_file_output_and_second_view_layer(blend, tmp_path):
 
 
 def test_failed_frame_restores_and_reports(blend, tmp_path, monkeypatch):
-    """In a session the frame's error is raised (Blender reports it) and
-    the scene is as before; under -b the job exits 1 (next test)."""
+    """In a session (no exit) the failed render composites nothing, the
+    error names the pass, and the scene is as before at the end."""
     scene = open_scene(blend, tmp_path)
     before = snapshot(scene)
     scene.sss.enabled = True
     monkeypatch.setenv("SSS_TEST_FAIL", "pass")
     monkeypatch.setattr(render_flow, "EXIT_ON_FAILURE", False)
-    bpy.ops.render.render(write_still=False)
-    render_flow.remove_leftovers()
+    with pytest.raises(RuntimeError) as err:  # the operator's ERROR report
+        bpy.ops.sss.render_frame()
+    message = str(err.value).strip()
+    assert "DiffCol" in message and "\n" not in message
     scene.sss.enabled = False
     assert diff(before, snapshot(scene)) == []
     assert [s.name for s in bpy.data.scenes] == [scene.name]
+
+
+def test_render_key_operator(blend, tmp_path):
+    """F12's operator: with the switch on, the Render Result is the
+    scattered frame; off, it is Blender's own render."""
+    scene = open_scene(blend, tmp_path)
+    want = expected(scene)
+    scene.sss.enabled = True
+    assert bpy.ops.sss.render_frame() == {'FINISHED'}
+    path = str(tmp_path / "result.png")
+    bpy.data.images["Render Result"].save_render(path, scene=scene)
+    assert np.abs(png(path) - want).max() <= 1.5 / 255
 
 
 def run_blender(path, *args, env=None):

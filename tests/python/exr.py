@@ -48,6 +48,13 @@ def write_channels(path, channels, width, height, half=(), attributes=None):
     out.close()
 
 
+def read_png(path):
+    """An 8- or 16-bit image's RGB as stored, in [0, 1] (float32)."""
+    buf = oiio.ImageBuf(str(path))
+    assert not buf.has_error, buf.geterror()
+    return buf.get_pixels(oiio.FLOAT)[:, :, :3]
+
+
 def pass_rgb(channels, prefix):
     """(h, w, 3) array of prefix.R/G/B."""
     return np.stack([channels[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
