@@ -67,7 +67,7 @@ from separable_sss import blender_compat as compat  # noqa: E402
 import numpy as np  # noqa: E402
 
 import compare_metrics as cm  # noqa: E402
-from exr_io import read_exr, write_exr  # noqa: E402
+from exr_io import SHORT_PASS_NAMES, read_exr, write_exr  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
 BACKGROUND = 1e10
@@ -448,41 +448,58 @@ def denoise_jobs(bench):
             r["method"] in ours]
 
 
-def denoise_rows(bench, args):
+class Denoiser:
     """Blender's compositor Denoise node (OIDN, with the render's albedo
-    and normal) on each job's image, in a compositor-only render (no Render
-    Layers node: Blender composites without rendering the scene again).
-    Adds a row per job: its render time, post = its post-process plus the
-    denoise."""
+    and normal) on one pass of an EXR, in a compositor-only render (no
+    Render Layers node: Blender composites without rendering the scene
+    again)."""
+
+    def __init__(self, args):
+        scene = open_scene(args, "CYCLES")
+        self.scene = scene
+        self.layer = bpy.context.view_layer.name     # the render's passes
+        tree = compat.compositor_tree(scene, create=True)
+        for node in list(tree.nodes):
+            tree.nodes.remove(node)
+        self.tree = tree
+        self.out = compat.composite_input(tree, create=True)
+        self.image_node = tree.nodes.new("CompositorNodeImage")
+        self.aux_node = tree.nodes.new("CompositorNodeImage")
+        self.denoise = tree.nodes.new("CompositorNodeDenoise")
+        tree.links.new(self.denoise.outputs[0], self.out)
+        scene.render.use_compositing = True
+
+    def __call__(self, path, layer, name):
+        """(denoised RGB of layer.name in path, seconds)."""
+        tree, image_node, aux_node = self.tree, self.image_node, self.aux_node
+        image = bpy.data.images.load(path, check_existing=False)
+        image_node.image = aux_node.image = image
+        image_node.layer = layer
+        aux_node.layer = self.layer
+        full = {v: k for k, v in SHORT_PASS_NAMES.items()}.get(name, name)
+        socket = image_node.outputs.get(name) or image_node.outputs[full]
+        tree.links.new(socket, self.denoise.inputs["Image"])
+        tree.links.new(aux_node.outputs["Denoising Normal"],
+                       self.denoise.inputs["Normal"])
+        tree.links.new(aux_node.outputs["Denoising Albedo"],
+                       self.denoise.inputs["Albedo"])
+        seconds = render(self.scene)
+        result = save_result(self.scene, path.replace(".exr", "_oidn.exr"))
+        bpy.data.images.remove(image)
+        return rgb(result, "Composite.Combined"), seconds
+
+
+def denoise_rows(bench, args):
+    """Adds a denoised row per job (denoise_jobs): its render time, post =
+    its post-process plus the denoise; then the default method on passes
+    denoised before the blur (denoise_passes_rows)."""
     jobs = denoise_jobs(bench)
     if not jobs:
         return
-    scene = open_scene(args, "CYCLES")
-    layer = bpy.context.view_layer.name     # the render's passes
-    tree = compat.compositor_tree(scene, create=True)
-    for node in list(tree.nodes):
-        tree.nodes.remove(node)
-    out = compat.composite_input(tree, create=True)
-    image_node = tree.nodes.new("CompositorNodeImage")
-    aux_node = tree.nodes.new("CompositorNodeImage")
-    denoise = tree.nodes.new("CompositorNodeDenoise")
-    tree.links.new(denoise.outputs[0], out)
-    scene.render.use_compositing = True
+    denoiser = Denoiser(args)
     for row, path, is_ours in jobs:
-        image = bpy.data.images.load(path, check_existing=False)
-        image_node.image = aux_node.image = image
-        image_node.layer = "SSS" if is_ours else layer
-        aux_node.layer = layer
-        tree.links.new(image_node.outputs["Combined"],
-                       denoise.inputs["Image"])
-        tree.links.new(aux_node.outputs["Denoising Normal"],
-                       denoise.inputs["Normal"])
-        tree.links.new(aux_node.outputs["Denoising Albedo"],
-                       denoise.inputs["Albedo"])
-        seconds = render(scene)
-        result = save_result(scene, path.replace(".exr", "_oidn.exr"))
-        img = rgb(result, "Composite.Combined")
-        bpy.data.images.remove(image)
+        img, seconds = denoiser(path, "SSS" if is_ours else denoiser.layer,
+                                "Combined")
         if np.array_equal(img, row["image"]):
             msg = ("OIDN rows skipped: this Blender's Denoise node leaves "
                    "the image as it is (built without OpenImageDenoise)")
@@ -492,6 +509,41 @@ def denoise_rows(bench, args):
         bench.add(row["renderer"], row["method"] + DENOISED, row["samples"],
                   row["render_s"], row["post_s"] + seconds, img,
                   row["io_s"])
+    denoise_passes_rows(bench, denoiser)
+
+
+LIGHT_PASSES = ("DiffDir", "DiffInd", "GlossDir", "GlossInd", "TransDir",
+                "TransInd")
+DENOISED_PASSES = "+oidn-passes"   # the light passes denoised, then SSS
+
+
+def denoise_passes_rows(bench, denoiser):
+    """The other order: every light pass of the SSS-off render denoised
+    (each by the Denoise node with the render's albedo and normal), then
+    the default method scatters and recombines them."""
+    from separable_sss import native
+    code = dict(bench.methods)[bench.default_method]
+    layer = denoiser.layer
+    for row in [r for r in bench.rows if r["renderer"] == "cycles" and
+                r["method"] == "no-sss" and "path" in r]:
+        inp = row["path"]
+        ch = read_exr(inp)
+        seconds = 0.0
+        for name in LIGHT_PASSES:
+            if f"{layer}.{name}.R" not in ch:
+                continue
+            img, s = denoiser(inp, layer, name)
+            seconds += s
+            for i, c in enumerate("RGB"):
+                ch[f"{layer}.{name}.{c}"] = img[:, :, i]
+        merged = inp.replace("_passes.exr", "_oidnpasses_passes.exr")
+        write_exr(merged, ch)
+        out = merged.replace("_passes.exr", f"_{bench.default_method}.exr")
+        with native.Scene(inp.replace("_passes.exr", "_scene.json")) as sc:
+            t = sc.process(merged, out, method=code)
+        bench.add("cycles", bench.default_method + DENOISED_PASSES,
+                  row["samples"], row["render_s"], seconds + t["scatter"],
+                  rgb(read_exr(out), "SSS.Combined"), t["read"] + t["write"])
 
 
 COLUMNS = ("scene", "renderer", "method", "samples", "render_s", "post_s",
@@ -652,12 +704,20 @@ def oidn_lines(rows, n, default):
     if not (base and ours):
         return []
     rw = row("random-walk" + DENOISED)
-    return [f"    with OIDN on both: {default}{DENOISED} RMSE "
-            f"{err(ours, 'rmse'):.4g} vs no-sss{DENOISED} "
-            f"{err(base, 'rmse'):.4g}: "
-            f"{cut(err(ours, 'rmse'), err(base, 'rmse')):.1f} % less error"
-            + (f"; random-walk{DENOISED} at {n} spp: RMSE "
-               f"{err(rw, 'rmse'):.4g}" if rw else "")]
+    lines = [f"    with OIDN on both: {default}{DENOISED} RMSE "
+             f"{err(ours, 'rmse'):.4g} vs no-sss{DENOISED} "
+             f"{err(base, 'rmse'):.4g}: "
+             f"{cut(err(ours, 'rmse'), err(base, 'rmse')):.1f} % less error"
+             + (f"; random-walk{DENOISED} at {n} spp: RMSE "
+                f"{err(rw, 'rmse'):.4g}" if rw else "")]
+    passes = row(default + DENOISED_PASSES)
+    if passes:
+        lines.append(f"    light passes denoised before the blur: "
+                     f"{default}{DENOISED_PASSES} RMSE "
+                     f"{err(passes, 'rmse'):.4g} "
+                     f"({cut(err(passes, 'rmse'), err(base, 'rmse')):.1f} % "
+                     f"less error than no-sss{DENOISED})")
+    return lines
 
 
 def noise_ceiling(rows, base):

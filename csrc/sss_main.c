@@ -526,8 +526,11 @@ int main(int argc, char **argv)
 		    expand(a.output, f, out, sizeof out)) {
 			const char *which = expand(a.input, f, in, sizeof in) ? a.input
 			                                                      : a.output;
-			snprintf(err, sizeof err, "frame %d: the path made from %.80s... "
-			         "is longer than %zu bytes", f, which, sizeof in - 1);
+			char frame[32] = "";
+			if (in_seq)
+				snprintf(frame, sizeof frame, "frame %d: ", f);
+			snprintf(err, sizeof err, "%sthe path made from %.80s... is "
+			         "longer than %zu bytes", frame, which, sizeof in - 1);
 			bad = 1;
 		} else if (check_frame(in, out, scene_id, a.scene, err,
 		                       sizeof err)) {

@@ -22,6 +22,8 @@ add-on's, so scripts and tests can import it on its own.
 - Material.use_nodes and Scene.use_nodes are going away (5.0 warns).
 - Image formats: 5.0 chooses a multilayer EXR by media type
   (MULTI_LAYER_IMAGE) before the file format.
+- Node options that became input sockets in 5.0: the Denoise node's HDR
+  (set_denoise_hdr).
 - File Output nodes: base_path and file_slots up to 4.x; in 5.0 directory,
   file_name and file_output_items (set_file_output, file_output_inputs).
 """
@@ -356,6 +358,15 @@ def file_output_inputs(node, names):
         for name in names:
             node.file_slots.new(name)
     return [node.inputs[name] for name in names]
+
+
+def set_denoise_hdr(node, hdr=True):
+    """The Denoise node's HDR switch: a property up to 4.x, an input
+    socket in 5.0."""
+    if hasattr(node, "use_hdr"):
+        node.use_hdr = hdr
+    else:
+        node.inputs["HDR"].default_value = hdr
 
 
 def blender_command():

@@ -327,7 +327,8 @@ class SSS_OT_render_frame(bpy.types.Operator):
 
     def execute(self, context):
         scene = context.scene
-        if not render_flow.enabled(scene):
+        if not render_flow.enabled(scene) and \
+                not render_flow.old_setup_shows(scene):
             return bpy.ops.render.render('INVOKE_DEFAULT', use_viewport=True,
                                          animation=self.animation)
         render_flow.last_error = None

@@ -78,6 +78,7 @@ class Flow:
         self.done = set()    # frames already scattered
         self.failed = False
         self.render_layers = []
+        self.denoise = False
 
     # -- files
     def passes_path(self, frame):
@@ -98,6 +99,15 @@ class Flow:
         copy.render.use_compositing = False
         copy.render.use_sequencer = False
         compat.set_multilayer_exr(copy.render.image_settings)
+        # The scene's denoiser applies to the scattered image (_rewire):
+        # Cycles' own would denoise only Combined, which the recombination
+        # does not use, so the copy stores OIDN's albedo and normal instead.
+        self.denoise = scene.render.engine == 'CYCLES' and \
+            scene.cycles.use_denoising
+        if self.denoise:
+            copy.cycles.use_denoising = False
+            for layer in copy.view_layers:
+                layer.cycles.denoising_store_passes = True
         self.tree_undo.set(scene.render, "use_compositing", True)
         tree = compat.compositor_tree(scene)
         if tree is None:  # Blender's default: Render Layers to Composite
@@ -109,6 +119,9 @@ class Flow:
             if n.bl_idname == "CompositorNodeRLayers" and not n.mute and
             (n.scene is None or n.scene == scene)]
         self.layers = sorted({n.layer for n in self.render_layers})
+        if self.denoise and any(n.bl_idname == "CompositorNodeDenoise" and
+                                not n.mute for n in tree.nodes):
+            self.denoise = False  # the artist denoises in the compositor
         if not self.layers:
             raise pipeline.SSSError("the compositor shows no view layer of "
                                     "this scene")
@@ -168,16 +181,35 @@ class Flow:
         node.frame_offset = start - 1
         node.frame_duration = 1048574 - start
 
+    def _denoised(self, node, sss, own):
+        """The scattered image through a Denoise node with the layer's
+        albedo and normal: what the scene's denoiser asks for (measured:
+        docs/denoising.md)."""
+        tree, undo = self.tree, self.tree_undo
+        dn = tree.nodes.new("CompositorNodeDenoise")
+        undo.add(lambda: tree.nodes.remove(dn))
+        dn.label = TAG
+        dn.location = (node.location.x + 200, node.location.y)
+        compat.set_denoise_hdr(dn)
+        tree.links.new(sss.outputs["Combined"], dn.inputs["Image"])
+        for name in ("Normal", "Albedo"):
+            aux = own.outputs.get("Denoising " + name)
+            if aux is not None:
+                tree.links.new(aux, dn.inputs[name])
+        return dn.outputs[0]
+
     def _rewire(self, node):
         tree, undo = self.tree, self.tree_undo
         sss, own = self._result_nodes(node)
+        image = self._denoised(node, sss, own) if self.denoise else \
+            sss.outputs.get("Combined")
         for link in list(tree.links):
             if link.from_node != node:
                 continue
             name, target = link.from_socket.name, link.to_socket
             if name in ("Image", "Alpha"):
-                source = sss.outputs.get("Combined" if name == "Image"
-                                         else "Alpha")
+                source = image if name == "Image" else sss.outputs.get(
+                    "Alpha")
             else:
                 source = own.outputs.get(name)
             original = link.from_socket
@@ -289,10 +321,63 @@ def _ours(scene):
                for f in _flows.values())
 
 
+def _unhook_old_setup(scene):
+    """With the switch off, a render shows what Blender renders, never
+    the result Render with SSS left on the Composite: for the render, the
+    Composite takes the Render Layers image again (put back afterwards).
+    Returns the undo, or None when there is nothing to do."""
+    tree = compat.compositor_tree(scene)
+    result = nodes.find_result(scene) if tree is not None else None
+    composite = compat.composite_input(tree, create=False) if result \
+        else None
+    if composite is None or not composite.is_linked:
+        return None
+    ours = {n.name for n in tree.nodes if n.get(nodes.ROLE_KEY)}
+    if composite.links[0].from_node.name not in ours:
+        return None
+    layers = next((n for n in tree.nodes
+                   if n.bl_idname == "CompositorNodeRLayers" and not n.mute),
+                  None)
+    if layers is None:
+        return None
+    undo = _Undo()
+    source = composite.links[0].from_socket
+    tree.links.remove(composite.links[0])
+    undo.add(lambda: tree.links.new(source, composite))
+    link = tree.links.new(layers.outputs["Image"], composite)
+    undo.add(lambda: tree.links.remove(link))
+    return undo
+
+
+# Renders with the switch off whose Composite was unhooked from an old
+# result (scene name -> undo).
+_unhooked = {}
+
+
+def old_setup_shows(scene):
+    """Whether a render with the switch off would composite an old SSS
+    result (the F12 operator then renders in the foreground, where
+    on_init can prevent it)."""
+    undo = _unhook_old_setup(scene)
+    if undo is None:
+        return False
+    undo.run()
+    return True
+
+
 @persistent
 def on_init(scene, *_):
     global last_error
-    if not enabled(scene) or scene.name in _flows or _ours(scene):
+    if _ours(scene) or scene.name in _flows:
+        return
+    if not enabled(scene):
+        if threading.current_thread() is threading.main_thread() and \
+                scene.name not in _unhooked:
+            undo = _unhook_old_setup(scene)
+            if undo is not None:
+                _unhooked[scene.name] = undo
+                _say(scene, "Screen-space SSS is off: the Composite shows "
+                     "this render, not the last SSS result")
         return
     if threading.current_thread() is not threading.main_thread():
         _say(scene, "a render job in the background cannot be scattered "
@@ -327,6 +412,9 @@ def on_pre(scene, *_):
 
 @persistent
 def on_end(scene, *_):
+    undo = _unhooked.pop(scene.name, None)
+    if undo is not None:
+        undo.run()
     flow = _flows.pop(scene.name, None)
     if flow is not None:
         flow.close()

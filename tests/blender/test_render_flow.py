@@ -23,6 +23,9 @@ from exr import read_channels  # noqa: E402
 @pytest.fixture(scope="module", autouse=True)
 def addon():
     separable_sss.register()
+    # In this process a failed frame must not end the test run (-b would):
+    # the subprocess tests check that exit.
+    render_flow.EXIT_ON_FAILURE = False
     yield
     separable_sss.unregister()
 
@@ -124,6 +127,46 @@ def test_transmission_as_for_stills(tmp_path):
     assert np.abs(got - want).max() <= 1.5 / 255
 
 
+def test_denoiser_applies_to_the_scattered_image(blend, tmp_path):
+    """With the scene's denoiser on, the frame is the SSS result through
+    OIDN (with the render's albedo and normal): the same image, less
+    noise. Without OIDN in this Blender, the Denoise node passes it."""
+    import _cycles
+    scene = open_scene(blend, tmp_path)
+    want = expected(scene)  # not denoised
+    scene.cycles.use_denoising = True
+    scene.sss.enabled = True
+    got = render_still(scene, tmp_path / "still")
+    if not getattr(_cycles, "with_openimagedenoise", False):
+        assert np.abs(got - want).max() <= 1.5 / 255
+        return
+
+    def roughness(img):  # high-frequency energy: what a denoiser removes
+        return np.abs(np.diff(img, axis=0)).mean() + \
+            np.abs(np.diff(img, axis=1)).mean()
+    assert roughness(got) < 0.8 * roughness(want)
+    assert abs(got.mean() - want.mean()) < 0.02
+    assert scene.cycles.use_denoising  # the scene's setting is kept
+
+
+def test_switch_off_never_shows_an_old_result(blend, tmp_path):
+    """Render with SSS leaves its result on the Composite; an ordinary
+    render with the switch off (a script, -f, F12's operator) writes what
+    Blender renders, and the set-up is back afterwards."""
+    scene = open_scene(blend, tmp_path)
+    plain = render_still(scene, tmp_path / "plain")
+    assert bpy.ops.sss.render() == {'FINISHED'}
+    scene.render.filepath = str(tmp_path / "after")
+    before = snapshot(scene)
+    after = render_still(scene, tmp_path / "after")
+    assert np.array_equal(after, plain)
+    assert diff(before, snapshot(scene)) == []
+    assert bpy.ops.sss.render_frame() == {'FINISHED'}
+    path = str(tmp_path / "result.png")
+    bpy.data.images["Render Result"].save_render(path, scene=scene)
+    assert np.array_equal(png(path), plain)
+
+
 def test_switch_off_is_plain_cycles(blend, tmp_path):
     scene = open_scene(blend, tmp_path)
     with_addon = render_still(scene, tmp_path / "a")
@@ -165,7 +208,6 @@ def test_failed_frame_restores_and_reports(blend, tmp_path, monkeypatch):
     before = snapshot(scene)
     scene.sss.enabled = True
     monkeypatch.setenv("SSS_TEST_FAIL", "pass")
-    monkeypatch.setattr(render_flow, "EXIT_ON_FAILURE", False)
     with pytest.raises(RuntimeError) as err:  # the operator's ERROR report
         bpy.ops.sss.render_frame()
     message = str(err.value).strip()
