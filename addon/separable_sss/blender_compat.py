@@ -260,6 +260,10 @@ def set_multilayer_exr(settings, depth="32", codec="ZIP"):
     settings.exr_codec = codec
 
 
+def is_multilayer_exr(settings):
+    return settings.file_format == "OPEN_EXR_MULTILAYER"
+
+
 # ----------------------------------------------------------------- EEVEE
 
 def plain_eevee(scene, samples):

@@ -41,6 +41,12 @@ class ProcessOptions(ctypes.Structure):
                 ("samples", ctypes.c_int32)]
 
 
+class Image(ctypes.Structure):
+    _fields_ = [("data", ctypes.POINTER(ctypes.c_float)),
+                ("width", ctypes.c_int32), ("height", ctypes.c_int32),
+                ("channels", ctypes.c_int32), ("row_stride", ctypes.c_int64)]
+
+
 class Timings(ctypes.Structure):
     _fields_ = [("read", ctypes.c_double), ("scatter", ctypes.c_double),
                 ("write", ctypes.c_double)]
@@ -85,6 +91,21 @@ def _declare(lib):
         "sss_burley_d": (c.c_int32, [c.c_void_p, c.POINTER(c.c_double)]),
         "sss_process_options_default": (None,
                                         [c.POINTER(ProcessOptions)]),
+        "sss_exr_read": (c.c_int32, [c.c_char_p, c.c_void_p,
+                                     c.POINTER(c.c_void_p), c.c_char_p,
+                                     c.c_size_t]),
+        "sss_exr_free": (None, [c.c_void_p]),
+        "sss_exr_pass_count": (c.c_int32, [c.c_void_p]),
+        "sss_exr_pass": (c.c_int32, [c.c_void_p, c.c_int32,
+                                     c.POINTER(c.c_char_p),
+                                     c.POINTER(c.c_char_p),
+                                     c.POINTER(c.c_char_p),
+                                     c.POINTER(Image)]),
+        "sss_exr_add_pass": (c.c_int32, [c.c_void_p, c.c_char_p, c.c_char_p,
+                                         c.c_char_p, c.POINTER(c.c_float),
+                                         c.c_char_p, c.c_size_t]),
+        "sss_exr_write": (c.c_int32, [c.c_void_p, c.c_char_p, c.c_void_p,
+                                      c.c_char_p, c.c_size_t]),
         "sss_process_exr": (c.c_int32, [c.c_char_p, c.c_char_p, c.c_void_p,
                                         c.POINTER(ProcessOptions),
                                         c.POINTER(Timings), c.c_char_p,
@@ -136,7 +157,8 @@ def version():
 def _check(code, detail):
     if code != 0:
         lib = library()
-        message = detail.value.decode(errors="replace") or \
+        message = (detail.value.decode(errors="replace") if detail
+                   is not None else "") or \
             lib.sss_status_string(code).decode()
         raise LibraryError(code, lib.sss_status_name(code).decode(), message)
 
@@ -218,3 +240,65 @@ class Scene:
         _check(code, err)
         return {"read": timings.read, "scatter": timings.scatter,
                 "write": timings.write}
+
+
+class Exr:
+    """A multilayer EXR in memory (sss_exr): its passes, more passes from
+    another, and an atomic write. What the render flow uses to put a
+    frame's passes beside Blender's composite."""
+
+    def __init__(self, path):
+        lib = library()
+        self._ptr = ctypes.c_void_p()
+        err = ctypes.create_string_buffer(4096)
+        _check(lib.sss_exr_read(os.fsencode(path), None,
+                                ctypes.byref(self._ptr), err, len(err)), err)
+
+    def close(self):
+        if self._ptr:
+            library().sss_exr_free(self._ptr)
+            self._ptr = ctypes.c_void_p()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def passes(self):
+        """[(layer, pass, components, view)] in file order."""
+        lib, out = library(), []
+        for i in range(lib.sss_exr_pass_count(self._ptr)):
+            layer, name, comps = (ctypes.c_char_p(), ctypes.c_char_p(),
+                                  ctypes.c_char_p())
+            view = Image()
+            _check(lib.sss_exr_pass(self._ptr, i, ctypes.byref(layer),
+                                    ctypes.byref(name), ctypes.byref(comps),
+                                    ctypes.byref(view)), None)
+            out.append((layer.value.decode(), name.value.decode(),
+                        comps.value.decode(), view))
+        return out
+
+    def copy_layer(self, source, layer, as_layer=None):
+        """Adds every pass of source's layer (under as_layer)."""
+        lib = library()
+        err = ctypes.create_string_buffer(4096)
+        for src_layer, name, comps, view in source.passes():
+            if src_layer != layer:
+                continue
+            row = view.width * view.channels
+            stride = view.row_stride or row
+            packed = (ctypes.c_float * (row * view.height))()
+            size = ctypes.sizeof(ctypes.c_float)
+            for y in range(view.height):
+                ctypes.memmove(ctypes.byref(packed, y * row * size),
+                               ctypes.addressof(view.data.contents) +
+                               y * stride * size, row * size)
+            _check(lib.sss_exr_add_pass(
+                self._ptr, (as_layer or layer).encode(), name.encode(),
+                comps.encode(), packed, err, len(err)), err)
+
+    def write(self, path):
+        err = ctypes.create_string_buffer(4096)
+        _check(library().sss_exr_write(self._ptr, os.fsencode(path), None,
+                                       err, len(err)), err)

@@ -40,7 +40,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import blender_compat as compat
-from . import nodes, pipeline
+from . import native, nodes, pipeline
 from .switch_off import TAG, _Undo, switched_off
 
 # The render in progress, per scene name (handlers get nothing else).
@@ -264,6 +264,24 @@ class Flow:
                 _remove(self.result_path(layer, old))
         self.done = {frame}
 
+    def write_passes(self, frame):
+        """A multilayer EXR output holds only the composite after a
+        compositing-only render: the frame's passes (every shown view
+        layer's, and its SSS layer: SSS for the first, SSS-NAME for the
+        others) join it, written over Blender's file atomically."""
+        path = bpy.path.abspath(self.scene.render.frame_path(frame=frame))
+        if not os.path.exists(path):
+            return
+        first = self.layers[0]
+        with native.Exr(self.result_path(first, frame)) as out, \
+                native.Exr(path) as written:
+            out.copy_layer(written, "Composite")
+            for layer in self.layers[1:]:
+                with native.Exr(self.result_path(layer, frame)) as other:
+                    out.copy_layer(other, layer)
+                    out.copy_layer(other, "SSS", "SSS-" + layer)
+            out.write(path)
+
     def blank(self):
         """After a failure: the compositor gets nothing from this scene's
         view layers for the rest of the render."""
@@ -411,6 +429,18 @@ def on_pre(scene, *_):
 
 
 @persistent
+def on_write(scene, *_):
+    flow = _flows.get(scene.name)
+    if flow is None or flow.failed or \
+            not compat.is_multilayer_exr(scene.render.image_settings):
+        return
+    try:
+        flow.write_passes(scene.frame_current)
+    except Exception as e:  # noqa: BLE001
+        _fail(scene, flow, e)
+
+
+@persistent
 def on_end(scene, *_):
     undo = _unhooked.pop(scene.name, None)
     if undo is not None:
@@ -443,6 +473,7 @@ def on_load(*_):
 
 HANDLERS = ((bpy.app.handlers.render_init, on_init),
             (bpy.app.handlers.render_pre, on_pre),
+            (bpy.app.handlers.render_write, on_write),
             (bpy.app.handlers.render_complete, on_end),
             (bpy.app.handlers.render_cancel, on_end),
             (bpy.app.handlers.save_pre, remove_leftovers),

@@ -167,6 +167,25 @@ def test_switch_off_never_shows_an_old_result(blend, tmp_path):
     assert np.array_equal(png(path), plain)
 
 
+def test_multilayer_exr_output_keeps_every_pass(blend, tmp_path):
+    """A compositing-only render writes only the composite into a
+    multilayer EXR: the frame's passes and SSS layer join it."""
+    scene = open_scene(blend, tmp_path)
+    compat.set_multilayer_exr(scene.render.image_settings)
+    scene.sss.enabled = True
+    scene.frame_start = scene.frame_end = 1
+    scene.render.filepath = str(tmp_path / "frame_####")
+    assert bpy.ops.render.render(animation=True) == {'FINISHED'}
+    render_flow.remove_leftovers()
+    ch, _ = read_channels(tmp_path / "frame_0001.exr")
+    for name in ("Composite.Combined.R", "SSS.Combined.R",
+                 "ViewLayer.DiffDir.R", "ViewLayer.Depth.Z"):
+        assert name in ch, sorted(ch)
+    composite = np.stack([ch[f"Composite.Combined.{c}"] for c in "RGB"], -1)
+    sss = np.stack([ch[f"SSS.Combined.{c}"] for c in "RGB"], -1)
+    assert np.abs(composite - sss).max() < 1e-3
+
+
 def test_switch_off_is_plain_cycles(blend, tmp_path):
     scene = open_scene(blend, tmp_path)
     with_addon = render_still(scene, tmp_path / "a")
