@@ -75,7 +75,8 @@ class Flow:
         self.tree_undo = _Undo()
         self.layers = []     # view layer names the compositor shows
         self.images = {}     # view layer name -> its result image
-        self.done = set()    # frames already scattered
+        self.done = set()    # frames whose results are on disk
+        self.first, self.keep_first = None, True
         self.failed = False
         self.render_layers = []
         self.denoise = False
@@ -125,7 +126,8 @@ class Flow:
         if not self.layers:
             raise pipeline.SSSError("the compositor shows no view layer of "
                                     "this scene")
-        self.frame(scene.frame_current)
+        self.first = scene.frame_current
+        self.frame(self.first)
         for node in self.render_layers:
             self._rewire(node)
         self._follow_old_setup()
@@ -228,6 +230,8 @@ class Flow:
         """Renders the frame's passes with SSS off and scatters every
         shown view layer into its result file."""
         if frame in self.done:
+            if frame == self.first:
+                self.keep_first = False  # reached: it may go after this
             return
         scene, copy = self.scene, self.copy
         # Blender updates the original data (what the description reads:
@@ -259,10 +263,14 @@ class Flow:
             _say(scene, f"frame {frame}, view layer {layer}: "
                  f"{pipeline.timings_text(job)}")
         os.remove(passes)
-        for old in self.done:
+        # The results of the frame before go; the first frame's stay until
+        # the render reaches it (open renders the scene's current frame,
+        # which an animation may reach later).
+        keep = {self.first} if self.keep_first else set()
+        for old in self.done - keep:
             for layer in self.layers:
                 _remove(self.result_path(layer, old))
-        self.done = {frame}
+        self.done = {frame} | keep
 
     def write_passes(self, frame):
         """A multilayer EXR output holds only the composite after a

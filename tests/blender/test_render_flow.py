@@ -266,10 +266,12 @@ def test_animation_follows_the_camera_per_frame(blend, tmp_path):
         cam.lens = lens
         cam.keyframe_insert("lens", frame=f)
     scene.render.filepath = str(tmp_path / "frame_####")
+    scene.frame_current = 2  # set up on frame 2: its result waits for it
     path = str(tmp_path / "anim.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
     proc = run_blender(path, "-a")
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+    assert proc.stdout.count(", view layer ViewLayer:") == 3, proc.stdout
     frames = []
     for f in (1, 2, 3):
         scene.frame_set(f)
