@@ -31,7 +31,7 @@ class Job:
     output_exr: str
     scene_json: str
     layer: str = ""
-    radius_scale: float = 1.0
+    radius_scale: float = 1.0  # times the description's own
     timings: dict = field(default_factory=dict)
     summary: str = ""
 
@@ -138,6 +138,9 @@ def scene_description(scene, found):
             "pixel_aspect_y": scene.render.pixel_aspect_y,
         },
         "unit_scale": scene.unit_settings.scale_length or 1.0,
+        # In the description, not beside it: `sss` on this file gives
+        # the add-on's result.
+        "radius_scale": scene.sss.radius_scale,
         "method": scene.sss.method.lower().replace("_", "-"),
         "taps": scene.sss.taps | 1,
         "materials": [_material_entry(f) for f in found.found],
@@ -209,7 +212,6 @@ def prepare_render(context):
         save_passes(scene, inp)
         write_description(scene, found, desc)
     return Job(inp, out, desc, context.view_layer.name,
-               scene.sss.radius_scale,
                summary=f"{len(found.found)} scattering material(s)")
 
 
@@ -227,7 +229,6 @@ def prepare_last_render(context):
         write_description(scene, found, desc)
     save_passes(scene, inp)
     return Job(inp, out, desc, context.view_layer.name,
-               scene.sss.radius_scale,
                summary=f"{len(found.found)} scattering material(s)")
 
 

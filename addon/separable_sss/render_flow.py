@@ -255,7 +255,7 @@ class Flow:
                                     "rendered")
         for layer in self.layers:
             job = pipeline.Job(passes, self.result_path(layer, frame), desc,
-                               layer, scene.sss.radius_scale)
+                               layer)
             try:
                 pipeline.scatter(job)
             except pipeline.SSSError as e:

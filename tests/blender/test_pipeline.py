@@ -1,6 +1,7 @@
 """The add-on's pipeline on real Cycles renders, headless."""
 import json
 import os
+import subprocess
 
 import bpy
 import numpy as np
@@ -102,6 +103,29 @@ def test_radius_scale_zero_is_cycles_combined(blends, tmp_path):
     assert err.max() < 1e-4, err.max()
 
 
+def test_sss_command_on_the_description_gives_the_same(blends, tmp_path):
+    """The scene's radius scale travels in the description: the `sss`
+    command on the add-on's own files gives the add-on's result."""
+    scene = open_scene(blends["two"], tmp_path)
+    scene.sss.radius_scale = 2.5
+    job = render(scene)
+    assert json.load(open(job.scene_json))["radius_scale"] == 2.5
+    out = str(tmp_path / "cli.exr")
+    proc = subprocess.run([os.path.join(BUILD, "sss"), job.input_exr, "-o",
+                           out, "--scene", job.scene_json, "-q"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    a, _ = read_channels(job.output_exr)
+    b, _ = read_channels(out)
+    assert np.array_equal(pass_rgb(a, "SSS.Combined"),
+                          pass_rgb(b, "SSS.Combined"))
+    scene.sss.radius_scale = 1.0
+    one = render(scene)
+    c, _ = read_channels(one.output_exr)
+    assert not np.array_equal(pass_rgb(a, "SSS.Combined"),
+                              pass_rgb(c, "SSS.Combined"))
+
+
 def test_two_materials_keep_their_profiles(blends, tmp_path):
     scene = open_scene(blends["two"], tmp_path)
     job = render(scene)
@@ -122,7 +146,6 @@ def test_two_materials_keep_their_profiles(blends, tmp_path):
     assert not changed[~scattering].any(), "plain pixels changed"
     # Each material scattered with its own kernel: its pixels are exactly
     # what a table holding only that material gives.
-    import subprocess
     light = pass_rgb(ch, "SSS.DiffLight")
     for name in ("Skin", "Jade"):
         alone = dict(desc, materials=[mats[name]])
@@ -230,7 +253,6 @@ def test_no_scattering_material(blends, tmp_path):
 
 
 def test_render_sss_script(blends, tmp_path):
-    import subprocess
     mtime = os.path.getmtime(blends["two"])
     out = tmp_path / "shot_####.exr"
     proc = subprocess.run(
