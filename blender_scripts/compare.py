@@ -448,6 +448,10 @@ def denoise_jobs(bench):
             r["method"] in ours]
 
 
+# Blender 5.0's Image node sockets carry the full pass names.
+FULL_PASS_NAMES = {short: full for full, short in SHORT_PASS_NAMES.items()}
+
+
 class Denoiser:
     """Blender's compositor Denoise node (OIDN, with the render's albedo
     and normal) on one pass of an EXR, in a compositor-only render (no
@@ -476,7 +480,7 @@ class Denoiser:
         image_node.image = aux_node.image = image
         image_node.layer = layer
         aux_node.layer = self.layer
-        full = {v: k for k, v in SHORT_PASS_NAMES.items()}.get(name, name)
+        full = FULL_PASS_NAMES.get(name, name)
         socket = image_node.outputs.get(name) or image_node.outputs[full]
         tree.links.new(socket, self.denoise.inputs["Image"])
         tree.links.new(aux_node.outputs["Denoising Normal"],

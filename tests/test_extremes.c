@@ -125,13 +125,16 @@ static void run_case(const shape *sh, const struct poison *po, float radius,
 }
 
 /* The scattered diffuse light of one material on s with the default
- * camera (caller frees); *status receives sss_apply's result. */
+ * camera, radii times radius_scale (caller frees); *status receives
+ * sss_apply's result. */
 static float *scatter_light(const synth *s, const sss_material *m,
-                            int method, sss_result *status)
+                            int method, float radius_scale,
+                            sss_result *status)
 {
 	sss_options o;
 	sss_options_default(&o);
 	o.method = method;
+	o.radius_scale = radius_scale;
 	sss_passes p = synth_passes(s);
 	sss_camera cam;
 	sss_camera_default(&cam);
@@ -158,7 +161,7 @@ static void test_constant_extremes(void)
 				m.radius[0] = m.radius[1] = m.radius[2] = radii[r];
 				m.taps = taps[t];
 				sss_result res;
-				float *light = scatter_light(s, &m, methods[mt], &res);
+				float *light = scatter_light(s, &m, methods[mt], 1.0f, &res);
 				double worst = 0;
 				for (size_t i = 0; i < (size_t)3 * w * h; i++)
 					worst = fmax(worst, fabs(light[i] - 0.7f));
@@ -227,16 +230,8 @@ static void test_huge_radii_limit(void)
 			sss_material m;
 			sss_material_default(&m, SSS_PROFILE_BURLEY);
 			m.pass_index = 1;
-			sss_options o;
-			sss_options_default(&o);
-			o.method = methods[mt];
-			o.radius_scale = scales[k];
-			sss_passes p = synth_passes(s);
-			sss_camera cam;
-			sss_camera_default(&cam);
-			float *light = calloc(n, sizeof(float));
-			sss_image ol = {light, w, h, 3, 0};
-			sss_result r = sss_apply(&p, &cam, &m, 1, &o, NULL, &ol, NULL, 0);
+			sss_result r;
+			float *light = scatter_light(s, &m, methods[mt], scales[k], &r);
 			double moved = 0, sum_in = 0, sum_out = 0;
 			for (size_t i = 0; i < n; i++) {
 				moved = fmax(moved, fabs(light[i] - s->diff_dir[i]));
@@ -316,7 +311,7 @@ static void test_energy(void)
 				m.jimenez_width *= (float)scale;
 				m.scatter_scale *= (float)scale;
 				sss_result r;
-				float *light = scatter_light(s, &m, methods[mt], &r);
+				float *light = scatter_light(s, &m, methods[mt], 1.0f, &r);
 				double sum[3] = {0, 0, 0};
 				for (size_t i = 0; i < (size_t)w * h; i++)
 					for (int c = 0; c < 3; c++)

@@ -347,25 +347,39 @@ def _ours(scene):
                for f in _flows.values())
 
 
+def _old_setup(scene):
+    """(tree, Composite input, Render Layers node) when the Composite is
+    fed by the set-up Render with SSS left in the compositor and a Render
+    Layers node could feed it instead; else None."""
+    tree = compat.compositor_tree(scene)
+    if tree is None or nodes.find_result(scene) is None:
+        return None
+    composite = compat.composite_input(tree, create=False)
+    if composite is None or not composite.is_linked or \
+            not composite.links[0].from_node.get(nodes.ROLE_KEY):
+        return None
+    layers = next((n for n in tree.nodes
+                   if n.bl_idname == "CompositorNodeRLayers" and not n.mute),
+                  None)
+    return (tree, composite, layers) if layers is not None else None
+
+
+def old_setup_shows(scene):
+    """Whether a render with the switch off would composite an old SSS
+    result (the F12 operator then renders in the foreground, where
+    on_init can prevent it)."""
+    return _old_setup(scene) is not None
+
+
 def _unhook_old_setup(scene):
     """With the switch off, a render shows what Blender renders, never
     the result Render with SSS left on the Composite: for the render, the
     Composite takes the Render Layers image again (put back afterwards).
     Returns the undo, or None when there is nothing to do."""
-    tree = compat.compositor_tree(scene)
-    result = nodes.find_result(scene) if tree is not None else None
-    composite = compat.composite_input(tree, create=False) if result \
-        else None
-    if composite is None or not composite.is_linked:
+    found = _old_setup(scene)
+    if found is None:
         return None
-    ours = {n.name for n in tree.nodes if n.get(nodes.ROLE_KEY)}
-    if composite.links[0].from_node.name not in ours:
-        return None
-    layers = next((n for n in tree.nodes
-                   if n.bl_idname == "CompositorNodeRLayers" and not n.mute),
-                  None)
-    if layers is None:
-        return None
+    tree, composite, layers = found
     undo = _Undo()
     source = composite.links[0].from_socket
     tree.links.remove(composite.links[0])
@@ -378,17 +392,6 @@ def _unhook_old_setup(scene):
 # Renders with the switch off whose Composite was unhooked from an old
 # result (scene name -> undo).
 _unhooked = {}
-
-
-def old_setup_shows(scene):
-    """Whether a render with the switch off would composite an old SSS
-    result (the F12 operator then renders in the foreground, where
-    on_init can prevent it)."""
-    undo = _unhook_old_setup(scene)
-    if undo is None:
-        return False
-    undo.run()
-    return True
 
 
 @persistent
@@ -425,27 +428,26 @@ def on_init(scene, *_):
         _fail(scene, flow, e)
 
 
-@persistent
-def on_pre(scene, *_):
+def _step(scene, do):
+    """do(flow) for the scene's running render; a failure stops the job."""
     flow = _flows.get(scene.name)
     if flow is None or flow.failed:
         return
     try:
-        flow.frame(scene.frame_current)
-    except Exception as e:  # noqa: BLE001
+        do(flow)
+    except Exception as e:  # noqa: BLE001 - every failure stops the job
         _fail(scene, flow, e)
 
 
 @persistent
+def on_pre(scene, *_):
+    _step(scene, lambda flow: flow.frame(scene.frame_current))
+
+
+@persistent
 def on_write(scene, *_):
-    flow = _flows.get(scene.name)
-    if flow is None or flow.failed or \
-            not compat.is_multilayer_exr(scene.render.image_settings):
-        return
-    try:
-        flow.write_passes(scene.frame_current)
-    except Exception as e:  # noqa: BLE001
-        _fail(scene, flow, e)
+    if compat.is_multilayer_exr(scene.render.image_settings):
+        _step(scene, lambda flow: flow.write_passes(scene.frame_current))
 
 
 @persistent
