@@ -436,7 +436,9 @@ typedef struct sss_exr_options {
 	/* writing: called with the temporary file's path once it exists and
 	 * with NULL once it is gone (renamed over the output or removed), on
 	 * the writing thread, so that a program stopped by a signal mid-write
-	 * can remove it (the `sss` command does). NULL = not told. */
+	 * can remove it (the `sss` command does). The first call comes with
+	 * the thread's signals blocked since the file was created: no signal
+	 * sees it exist unannounced. NULL = not told. */
 	void (*temporary_fn)(const char *path, void *user);
 	void *temporary_user;
 } sss_exr_options;

@@ -9,6 +9,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1892,9 +1893,8 @@ static void remove_stale_temporaries(const char *path)
 	free(full);
 }
 
-/* Creates a new, unique, empty temporary for path and takes its lock.
- * O_EXCL makes it ours alone; mode 0666 less the umask, as any new file. */
-static int create_temp(const char *path, char **out)
+/* create_temp's work: a unique name beside path, opened and locked. */
+static int create_locked_temp(const char *path, char **out)
 {
 	size_t dir_len, cap = strlen(path) + 64;
 	char *t = malloc(cap);
@@ -1936,6 +1936,26 @@ static int create_temp(const char *path, char **out)
 	return -1;
 }
 
+/* Creates a new, unique, empty temporary for path, takes its lock and
+ * tells o->temporary_fn. O_EXCL makes it ours alone; mode 0666 less the
+ * umask, as any new file. Signals wait while this runs (the calling
+ * thread's mask, restored), so that a handler that removes the announced
+ * temporary never finds one that exists but was not yet announced. */
+static int create_temp(const char *path, const sss_exr_options *o,
+                       char **out)
+{
+	sigset_t all, old;
+	sigfillset(&all);
+	pthread_sigmask(SIG_BLOCK, &all, &old);
+	int fd = create_locked_temp(path, out);
+	int e = errno;
+	if (fd >= 0 && o->temporary_fn)
+		o->temporary_fn(*out, o->temporary_user);
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	errno = e;
+	return fd;
+}
+
 sss_result sss_exr_write(const sss_exr *exr, const char *path,
                          const sss_exr_options *opt, char *errbuf,
                          size_t errbuf_len)
@@ -1965,13 +1985,11 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 
 	remove_stale_temporaries(path);
 	char *tmp = NULL;
-	int fd = create_temp(path, &tmp);
+	int fd = create_temp(path, &o, &tmp);
 	if (fd < 0)
 		return FAILX(errno == ENOMEM ? SSS_ERR_OUT_OF_MEMORY : SSS_ERR_IO,
 		             "%s: cannot create a temporary file in its directory: "
 		             "%s", path, strerror(errno));
-	if (o.temporary_fn)
-		o.temporary_fn(tmp, o.temporary_user);
 	xio io;
 	xio_init(&io, fd);
 	r = write_file(exr, &o, path, tmp, &io, errbuf, errbuf_len);
