@@ -38,29 +38,40 @@ TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
-$(BUILD)/libsss.so: $(LIB_SRC) $(LIB_HDR) Makefile
+# Each library source is compiled once, position-independent, into
+# $(BUILD)/obj; the shared library, the command and every test link those
+# objects (the tests and the command through the static archive).
+LIB_OBJ := $(patsubst csrc/%.c,$(BUILD)/obj/%.o,$(LIB_SRC))
+$(BUILD)/obj/%.o: csrc/%.c $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -shared -o $@ $(LIB_SRC) $(LDLIBS)
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -c -o $@ $<
+
+$(BUILD)/libsss.a: $(LIB_OBJ)
+	@rm -f $@
+	$(AR) rcs $@ $(LIB_OBJ)
+
+$(BUILD)/libsss.so: $(LIB_OBJ)
+	$(CC) $(CFLAGS) $(BASE) -shared -o $@ $(LIB_OBJ) $(LDLIBS)
 
 # The command links the library's objects in, so it runs from anywhere.
-$(BUILD)/sss: csrc/sss_main.c $(LIB_SRC) $(LIB_HDR) Makefile
-	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -o $@ csrc/sss_main.c $(LIB_SRC) $(LDLIBS)
+$(BUILD)/sss: csrc/sss_main.c csrc/sss.h $(BUILD)/libsss.a Makefile
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -o $@ csrc/sss_main.c \
+		$(BUILD)/libsss.a $(LDLIBS)
 
-# Tests link the library's objects statically so that they can also reach
-# internal helpers; the shared library is what ships and what nm checks.
-$(BUILD)/tests/%: tests/%.c tests/test_util.h tests/synth.h $(LIB_SRC) $(LIB_HDR) Makefile
+# Tests link the static archive so that they can also reach internal
+# helpers; the shared library is what ships and what nm checks.
+$(BUILD)/tests/%: tests/%.c tests/test_util.h tests/synth.h $(BUILD)/libsss.a $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -Icsrc -o $@ $< $(LIB_SRC) $(LDLIBS) \
-		$(if $(findstring test_oom,$@),$(WRAP_ALLOC))
+	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -Icsrc -o $@ $< $(BUILD)/libsss.a \
+		$(LDLIBS) $(if $(findstring test_oom,$@),$(WRAP_ALLOC))
 
 # The fuzz harness without libFuzzer: replays tests/fuzz/corpus (seeds and
 # every input the fuzzer ever failed on) in make test and make check.
-$(BUILD)/tests/fuzz_replay: tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(LIB_SRC) $(LIB_HDR) Makefile
+$(BUILD)/tests/fuzz_replay: tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(BUILD)/libsss.a $(LIB_HDR) Makefile
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(BASE) $(LIB_INC) -D_GNU_SOURCE -Icsrc \
 		-DFUZZ_CORPUS='"$(abspath tests/fuzz/corpus)"' -o $@ \
-		tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(LIB_SRC) $(LDLIBS)
+		tests/fuzz/replay.c tests/fuzz/fuzz_exr.c $(BUILD)/libsss.a $(LDLIBS)
 
 # Coverage-guided fuzzing with libFuzzer (clang): FUZZ_SECONDS per run.
 FUZZ_SECONDS ?= 60

@@ -87,13 +87,9 @@ static double peak_rss_mib(void)
 
 static int method_by_name(const char *name)
 {
-	static const char *names[] = {"separable", "separable-exact", "disk",
-	                              "reference"};
-	static const int ids[] = {SSS_METHOD_SEPARABLE, SSS_METHOD_SEPARABLE_EXACT,
-	                          SSS_METHOD_DISK, SSS_METHOD_REFERENCE};
-	for (size_t i = 0; i < sizeof ids / sizeof *ids; i++)
-		if (!strcmp(name, names[i]))
-			return ids[i];
+	for (int32_t m = 0; sss_method_name(m); m++)
+		if (!strcmp(name, sss_method_name(m)))
+			return m;
 	fprintf(stderr, "sss-bench: unknown method '%s'\n", name);
 	exit(2);
 }

@@ -354,6 +354,24 @@ SSS_API sss_result sss_transmittance(const sss_material *mat,
                                      double thickness_metres, double facing,
                                      double out[3]);
 
+/* How thick a part of this material can be before its transmittance
+ * (strength and colour aside) falls below 1 % of what a thin part lets
+ * through, in metres at radius_scale 1: how far a thickness measurement
+ * must reach (the add-on's ambient-occlusion distance). 0 when the
+ * material does not transmit. */
+SSS_API sss_result sss_transmission_reach(const sss_material *mat,
+                                          double *metres);
+
+/* The diffusion slab behind SSS_TRANSMISSION_BURLEY on a Burley profile,
+ * per channel, in metres at radius_scale 1 (sss_transmission.c): T(t) =
+ * (1 - e^{-2 s a}) e^{-s (L - 2 a)} / (1 - e^{-2 s L}), L = max(t + 2 zb,
+ * 2 a), s = sigma_tr (a / L when s L < 1e-6). A channel without a medium
+ * (radius 0) gets zeros. SSS_ERR_UNSUPPORTED when the material's
+ * transmission is not that slab. */
+SSS_API sss_result sss_transmission_slab(const sss_material *mat,
+                                         double sigma_tr[3], double a[3],
+                                         double zb[3]);
+
 /* The energy gain of a calibration for a diffuse colour (albedo, clamped
  * to [0, 1]; a non-finite channel gets 1): the measured reflectance of the
  * calibrated renderer over the plain diffuse lobe's. NONE gives 1. */
@@ -372,6 +390,13 @@ enum sss_method {
 	                             up to `samples` samples per pixel */
 	SSS_METHOD_REFERENCE = 3  /* brute-force 2-D, true distances: slow */
 };
+
+/* The method's name in scene descriptions and on the command line
+ * ("separable", ...) and one line on what it trades; NULL for a value that
+ * is not a method, so that counting from 0 up to the first NULL lists
+ * every method. */
+SSS_API const char *sss_method_name(int32_t method);
+SSS_API const char *sss_method_summary(int32_t method);
 
 typedef struct sss_options {
 	uint32_t struct_size;

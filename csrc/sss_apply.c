@@ -9,31 +9,30 @@
 
 #define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
-sss_result sss__check_image(const char *name, const sss_image *im,
-                            int32_t min_channels, int required, int32_t w,
-                            int32_t h, char *errbuf, size_t errbuf_len)
+/* Indexed by sss_method: the one place the methods are named. */
+static const struct {
+	const char *name, *summary;
+} methods[] = {
+	[SSS_METHOD_SEPARABLE] = {"separable", "Two 1-D passes: fast"},
+	[SSS_METHOD_SEPARABLE_EXACT] = {"separable-exact", "Two 1-D passes "
+		"per Gaussian lobe: exact for Gaussian sums, Burley fitted; "
+		"slower than separable"},
+	[SSS_METHOD_DISK] = {"disk", "Stochastic disk samples (64 per pixel "
+		"by default): grainy on fine detail"},
+	[SSS_METHOD_REFERENCE] = {"reference", "Brute-force 2-D: slow, exact "
+		"in screen space"},
+};
+
+const char *sss_method_name(int32_t method)
 {
-	if (!im->data) {
-		if (required)
-			return FAILX(SSS_ERR_MISSING_PASS, "pass %s is required but "
-			             "absent", name);
-		return SSS_OK;
-	}
-	if (im->width <= 0 || im->height <= 0)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: image size %dx%d "
-		             "must be at least 1x1", name, im->width, im->height);
-	if (im->channels < min_channels)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s has %d channel(s), "
-		             "needs %d", name, im->channels, min_channels);
-	if (im->row_stride != 0 &&
-	    im->row_stride < (int64_t)im->width * im->channels)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: row_stride %lld "
-		             "is smaller than width x channels", name,
-		             (long long)im->row_stride);
-	if (im->width != w || im->height != h)
-		return FAILX(SSS_ERR_SIZE_MISMATCH, "pass %s is %dx%d but DiffDir "
-		             "is %dx%d", name, im->width, im->height, w, h);
-	return SSS_OK;
+	if (method < 0 || method >= (int32_t)(sizeof methods / sizeof *methods))
+		return NULL;
+	return methods[method].name;
+}
+
+const char *sss_method_summary(int32_t method)
+{
+	return sss_method_name(method) ? methods[method].summary : NULL;
 }
 
 static sss_result check_output(const char *name, const sss_image *out,
@@ -74,9 +73,7 @@ static sss_result check_options(const sss_options *o, char *errbuf,
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: struct_size %u, "
 		             "expected %zu (use sss_options_default)", o->struct_size,
 		             sizeof *o);
-	if (o->method != SSS_METHOD_SEPARABLE &&
-	    o->method != SSS_METHOD_SEPARABLE_EXACT &&
-	    o->method != SSS_METHOD_DISK && o->method != SSS_METHOD_REFERENCE)
+	if (!sss_method_name(o->method))
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: unknown method %d",
 		             o->method);
 	if (!(isfinite(o->radius_scale) && o->radius_scale >= 0.0f))

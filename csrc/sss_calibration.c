@@ -245,7 +245,7 @@ static double dipole_rd(double a, double four_thirds_a)
  * (A = 0.9 .. 0.99: 0.032 - 0.034). */
 #define CYCLES_RW_MIN_D 0.032
 
-double sss__cycles_rw_d_over_radius(double albedo)
+double sss__cycles_rw_mfp_over_radius(double albedo)
 {
 	const double eta = 1.4; /* Principled's default Subsurface IOR */
 	double f_dr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
@@ -266,9 +266,14 @@ double sss__cycles_rw_d_over_radius(double albedo)
 		}
 		alpha = 0.5 * (lo + hi);
 	}
-	double mfp = sqrt(3.0 * (1.0 - alpha)); /* mean free path / radius */
+	return sqrt(3.0 * (1.0 - alpha));
+}
+
+double sss__cycles_rw_d_over_radius(double albedo)
+{
+	double a = albedo;
 	double s = 1.9 - a + 3.5 * (a - 0.8) * (a - 0.8);
-	double d = mfp / s;
+	double d = sss__cycles_rw_mfp_over_radius(a) / s;
 	if (a < 0.995 && d < CYCLES_RW_MIN_D)
 		d = CYCLES_RW_MIN_D;
 	return d;

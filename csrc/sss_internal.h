@@ -55,6 +55,11 @@ typedef struct sss__job {
  * messages that refuse a file (sss_status.c). */
 const char *sss__file_kind(unsigned mode);
 
+/* d'Eon & Luebke 2007 six-Gaussian skin (sss_material.c): variances in
+ * mm^2 and RGB weights, each channel summing to 1. */
+extern const float sss__deon_variance[6];
+extern const float sss__deon_weight[6][3];
+
 /* errbuf helper: formats into errbuf when given, returns code. */
 sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
                      const char *fmt, ...)
@@ -76,6 +81,9 @@ void sss__line_mass3(const sss__kernel *k, double a, double b,
  * over the radius for an albedo (SSS_BURLEY_CYCLES_RANDOM_WALK, and
  * SSS_BURLEY_CYCLES4_RANDOM_WALK), and the per-pixel energy gain
  * 1 + strength (g(DiffCol) - 1) on the scattered light. */
+/* Cycles' random-walk mean free path over the radius, sqrt(3 (1 - a'))
+ * with a' inverting Jensen's dipole at IOR 1.4 (bssrdf_setup_radius). */
+double sss__cycles_rw_mfp_over_radius(double albedo);
 double sss__cycles_rw_d_over_radius(double albedo);
 double sss__cycles4_rw_d_over_radius(double albedo);
 void sss__calibration_apply(const sss_material *mat, const float *diff_col,

@@ -37,11 +37,8 @@ static const char usage_text[] =
 "                          materials by pass index; see docs/scene.md); a\n"
 "                          file or a pipe\n"
 "  -f, --frames LIST       frames for #### patterns: 1-240, 1-240x2, 7,9,12-20\n"
-"  -m, --method NAME       separable (default: fast), separable-exact (two\n"
-"                          passes per Gaussian lobe: exact for Gaussian sums,\n"
-"                          Burley fitted; 15-25x separable's time), disk\n"
-"                          (stochastic samples; grainy at low --samples) or\n"
-"                          reference (brute force: slow, exact)\n"
+"  -m, --method NAME       scattering method, one of those below (default:\n"
+"                          the scene's, else the first)\n"
 "      --samples N         disk method: most samples per pixel, 1..4096\n"
 "                          (default: the scene's, else 64)\n"
 "  -r, --radius-scale F    multiply every radius by F >= 0 (0 = no scattering:\n"
@@ -58,8 +55,9 @@ static const char usage_text[] =
 "                          a stopped run resumes)\n"
 "  -q, --quiet             print errors only\n"
 "  -h, --help              this text\n"
-"  -V, --version           version\n"
-"\n"
+"  -V, --version           version\n";
+
+static const char usage_examples[] =
 "examples:\n"
 "  sss shot.exr -o shot_sss.exr --scene shot.json\n"
 "  sss render/frame_####.exr --frames 1-240 -o sss/frame_####.exr \\\n"
@@ -82,6 +80,40 @@ typedef struct args {
 	int resume;
 } args;
 
+/* The options, then the library's methods with what each trades (words
+ * wrapped to 78 columns), then the examples. */
+static void print_usage(void)
+{
+	fputs(usage_text, stdout);
+	fputs("\nmethods:\n", stdout);
+	for (int32_t m = 0; sss_method_name(m); m++) {
+		int col = printf("  %-17s", sss_method_name(m));
+		const char *w = sss_method_summary(m);
+		for (int first = 1; *w; first = 0) {
+			w += *w == ' ';
+			int len = (int)strcspn(w, " ");
+			if (!first && col + 1 + len > 78)
+				col = printf("\n%19s", "") - 1;
+			else if (!first)
+				col += printf(" ");
+			col += printf("%.*s", len, w);
+			w += len;
+		}
+		printf("\n");
+	}
+	fputs("\n", stdout);
+	fputs(usage_examples, stdout);
+}
+
+/* The method named `name`, or -1. */
+static int method_by_name(const char *name)
+{
+	for (int32_t m = 0; sss_method_name(m); m++)
+		if (strcmp(name, sss_method_name(m)) == 0)
+			return m;
+	return -1;
+}
+
 static int usage_error(const char *fmt, const char *what)
 {
 	fprintf(stderr, "sss: ");
@@ -98,8 +130,6 @@ static int lookup(const char *name, const char *const *names, int count)
 	return -1;
 }
 
-static const char *const method_names[] = {"separable", "separable-exact",
-                                           "disk", "reference"};
 /* Indexed by sss_exr_compression; DWAA/DWAB are absent from OpenEXR 3.1's
  * C API, so they are not offered. */
 static const char *const compression_names[] = {"none", "rle", "zips", "zip",
@@ -399,17 +429,16 @@ int main(int argc, char **argv)
 		case 'l': a.layer = optarg; break;
 		case 'q': a.quiet = 1; break;
 		case 'R': a.resume = 1; break;
-		case 'h': fputs(usage_text, stdout); return 0;
+		case 'h': print_usage(); return 0;
 		case 'V':
 			printf("sss %s (libsss ABI %u)\n", sss_version_string(),
 			       sss_abi_version());
 			return 0;
 		case 'm':
-			a.method = lookup(optarg, method_names, 4);
+			a.method = method_by_name(optarg);
 			if (a.method < 0)
-				return usage_error("unknown method '%s' (separable, "
-				                   "separable-exact, disk, reference)",
-				                   optarg);
+				return usage_error("unknown method '%s' (sss --help "
+				                   "lists them)", optarg);
 			break;
 		case 'c':
 			a.compression = lookup(optarg, compression_names, 8);

@@ -1,7 +1,6 @@
 /* sss_material.c - material defaults, validation and Burley's radius
  * mapping: everything about one row of the table, before any tabulation. */
 #include "sss_internal.h"
-#include "sss_transmission.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -96,6 +95,52 @@ static sss_result check3(const float *v, float lo, float hi, int open_lo,
 	return SSS_OK;
 }
 
+/* The transmission fields, checked only when the material transmits. */
+static sss_result check_transmission(const sss_material *mat, char *errbuf,
+                                     size_t errbuf_len)
+{
+	int32_t idx = mat->pass_index;
+	if (mat->transmission < SSS_TRANSMISSION_OFF ||
+	    mat->transmission > SSS_TRANSMISSION_FAST)
+		return FAIL("material %d: unknown transmission model %d", idx,
+		            mat->transmission);
+	if (mat->transmission == SSS_TRANSMISSION_OFF)
+		return SSS_OK;
+	static const char rgb[3] = {'r', 'g', 'b'};
+	if (!in_range(mat->transmission_strength, 0.0f, 1.0f))
+		return FAIL("material %d: transmission_strength %g must be in "
+		            "[0, 1]", idx, (double)mat->transmission_strength);
+	for (int c = 0; c < 3; c++)
+		if (!in_range(mat->transmission_color[c], 0.0f, 1.0f))
+			return FAIL("material %d: transmission_color.%c = %g must be "
+			            "in [0, 1]", idx, rgb[c],
+			            (double)mat->transmission_color[c]);
+	if (!in_range(mat->transmission_distance, 0.0f, 1e30f) ||
+	    !(mat->transmission_distance > 0.0f))
+		return FAIL("material %d: transmission_distance %g must be > 0 "
+		            "(metres)", idx, (double)mat->transmission_distance);
+	if (!in_range(mat->transmission_translucency, 0.0f, 1.0f))
+		return FAIL("material %d: transmission_translucency %g must be in "
+		            "[0, 1]", idx, (double)mat->transmission_translucency);
+	if (!in_range(mat->transmission_distortion, 0.0f, 1.0f))
+		return FAIL("material %d: transmission_distortion %g must be in "
+		            "[0, 1]", idx, (double)mat->transmission_distortion);
+	if (!in_range(mat->transmission_power, 0.0f, 1e30f) ||
+	    !(mat->transmission_power > 0.0f))
+		return FAIL("material %d: transmission_power %g must be > 0", idx,
+		            (double)mat->transmission_power);
+	if (!in_range(mat->transmission_scale, 0.0f, 1e30f))
+		return FAIL("material %d: transmission_scale %g must be >= 0", idx,
+		            (double)mat->transmission_scale);
+	if (!in_range(mat->transmission_ambient, 0.0f, 1e30f))
+		return FAIL("material %d: transmission_ambient %g must be >= 0",
+		            idx, (double)mat->transmission_ambient);
+	if (!in_range(mat->thickness_scale, 0.0f, 1e30f))
+		return FAIL("material %d: thickness_scale %g must be >= 0", idx,
+		            (double)mat->thickness_scale);
+	return SSS_OK;
+}
+
 sss_result sss_material_validate(const sss_material *mat, char *errbuf,
                                  size_t errbuf_len)
 {
@@ -123,7 +168,7 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 		return FAIL("material %d: taps %d must be 0 (default) or 1..4097",
 		            idx, mat->taps);
 
-	if ((r = sss__transmission_validate(mat, errbuf, errbuf_len)))
+	if ((r = check_transmission(mat, errbuf, errbuf_len)))
 		return r;
 	if (mat->calibration < SSS_CALIBRATION_NONE ||
 	    mat->calibration > SSS_CALIBRATION_CYCLES4_RANDOM_WALK)

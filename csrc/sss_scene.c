@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <float.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -146,27 +147,75 @@ static void join_index(char *dst, const char *path, int i)
 	cat3(dst, path, idx, "");
 }
 
-/* Finds an object's known members: found[k] is the member named keys[k]
- * or NULL. Unknown members are warnings; a known key given twice is an
- * error, since which one was meant is unclear. */
+/* ------------------------------------------------------------ fields
+ *
+ * Each JSON object is read through one table of its keys: the key, where
+ * its value goes in the struct being filled and what it may hold. A new
+ * field is one line in its table (plus, for a material, its default and
+ * its check in sss_material.c). */
+
+/* Allowed numbers: [lo, hi], lo excluded when lo_open. */
+typedef struct span {
+	double lo, hi;
+	int lo_open;
+} span;
+
+#define ANY {-DBL_MAX, DBL_MAX, 0}
+#define POSITIVE {0.0, DBL_MAX, 1}
+/* Float fields share sss_material_validate's upper bound. */
+#define POSITIVE_F {0.0, 1e30, 1}
+#define NONNEG_F {0.0, 1e30, 0}
+#define UNIT {0.0, 1.0, 0}
+
+enum field_type {
+	FIELD_F64,     /* double within range */
+	FIELD_F32,     /* float within range */
+	FIELD_VEC3,    /* float[3], each within range */
+	FIELD_INT,     /* int32_t in [lo, hi] */
+	FIELD_ENUM,    /* int32_t, one of names */
+	FIELD_METHOD,  /* int32_t, one of sss_method_name's */
+	FIELD_SPECIAL  /* read by the object's own code */
+};
+
+typedef struct name_value {
+	const char *name;
+	int32_t value;
+} name_value;
+
+typedef struct field {
+	const char *key;
+	int8_t profile;  /* materials: the profile it belongs to, -1 = every */
+	uint8_t type;    /* field_type */
+	size_t offset;   /* in the struct being filled */
+	span range;      /* F64, F32, VEC3 */
+	int32_t lo, hi;  /* INT */
+	const char *what;        /* ENUM: "profile" in "unknown profile 'x'" */
+	const name_value *names; /* ENUM */
+	int name_count;
+} field;
+
+#define COUNT(a) ((int)(sizeof(a) / sizeof *(a)))
+
+/* Finds an object's known members: found[k] is the member named
+ * fields[k].key or NULL. Unknown members are warnings; a known key given
+ * twice is an error, since which one was meant is unclear. */
 static sss_result scan(ctx *c, const cJSON *obj, const char *path,
-                       const char *const *keys, int nkeys,
-                       const cJSON **found)
+                       const field *fields, int nfields, const cJSON **found)
 {
-	for (int k = 0; k < nkeys; k++)
+	for (int k = 0; k < nfields; k++)
 		found[k] = NULL;
 	const cJSON *it;
 	cJSON_ArrayForEach(it, obj) {
 		int k = 0;
-		while (k < nkeys && strcmp(it->string, keys[k]) != 0)
+		while (k < nfields && strcmp(it->string, fields[k].key) != 0)
 			k++;
-		if (k == nkeys) {
+		if (k == nfields) {
 			char buf[48];
 			warn(c, "warning: unknown key '%s%s%s' (ignored)", path,
 			     *path ? "." : "", printable(it->string, buf, sizeof buf));
 		} else if (found[k]) {
 			char p[PATH_LEN];
-			join(p, path, keys[k]);
+			join(p, path, fields[k].key);
 			return FAIL(c, "%s: key given twice", p);
 		} else {
 			found[k] = it;
@@ -176,19 +225,6 @@ static sss_result scan(ctx *c, const cJSON *obj, const char *path,
 }
 
 /* ------------------------------------------------------------ values */
-
-/* Allowed numbers: [lo, hi], lo excluded when lo_open. */
-typedef struct span {
-	double lo, hi;
-	int lo_open;
-} span;
-
-static const span ANY = {-DBL_MAX, DBL_MAX, 0};
-static const span POSITIVE = {0.0, DBL_MAX, 1};
-/* Float fields share sss_material_validate's upper bound. */
-static const span POSITIVE_F = {0.0, 1e30, 1};
-static const span NONNEG_F = {0.0, 1e30, 0};
-static const span UNIT = {0.0, 1.0, 0};
 
 static sss_result get_f64(ctx *c, const cJSON *it, const char *path,
                           span s, double *out)
@@ -266,11 +302,6 @@ static sss_result get_vec3(ctx *c, const cJSON *it, const char *path,
 	return SSS_OK;
 }
 
-typedef struct name_value {
-	const char *name;
-	int32_t value;
-} name_value;
-
 static sss_result get_enum(ctx *c, const cJSON *it, const char *path,
                            const char *what, const name_value *tab, int n,
                            int32_t *out)
@@ -293,19 +324,12 @@ static sss_result get_enum(ctx *c, const cJSON *it, const char *path,
 	            printable(it->valuestring, buf, sizeof buf), list);
 }
 
-#define COUNT(a) ((int)(sizeof(a) / sizeof *(a)))
-
 static const name_value camera_types[] = {
 	{"PERSP", SSS_CAMERA_PERSPECTIVE}, {"ORTHO", SSS_CAMERA_ORTHOGRAPHIC},
 };
 static const name_value sensor_fits[] = {
 	{"AUTO", SSS_SENSOR_FIT_AUTO}, {"HORIZONTAL", SSS_SENSOR_FIT_HORIZONTAL},
 	{"VERTICAL", SSS_SENSOR_FIT_VERTICAL},
-};
-static const name_value methods[] = {
-	{"separable", SSS_METHOD_SEPARABLE}, {"reference", SSS_METHOD_REFERENCE},
-	{"separable-exact", SSS_METHOD_SEPARABLE_EXACT},
-	{"disk", SSS_METHOD_DISK},
 };
 static const name_value profiles[] = {
 	{"burley", SSS_PROFILE_BURLEY}, {"gaussians", SSS_PROFILE_GAUSSIANS},
@@ -343,69 +367,103 @@ static const char *profile_name(int32_t kind)
 	return "?";
 }
 
+/* Reads every given key of a table whose type is not FIELD_SPECIAL into
+ * base, in table order. */
+static sss_result parse_fields(ctx *c, const char *path, const field *fields,
+                               int nfields, const cJSON *const *found,
+                               void *base)
+{
+	for (int k = 0; k < nfields; k++) {
+		const field *fd = &fields[k];
+		const cJSON *it = found[k];
+		if (!it || fd->type == FIELD_SPECIAL)
+			continue;
+		char p[PATH_LEN];
+		join(p, path, fd->key);
+		void *dst = (char *)base + fd->offset;
+		name_value methods[8];
+		int nmethods = 0;
+		sss_result r = SSS_OK;
+		switch (fd->type) {
+		case FIELD_F64:
+			r = get_f64(c, it, p, fd->range, dst);
+			break;
+		case FIELD_F32:
+			r = get_f32(c, it, p, fd->range, dst);
+			break;
+		case FIELD_VEC3:
+			r = get_vec3(c, it, p, fd->range, dst);
+			break;
+		case FIELD_INT:
+			r = get_int(c, it, p, fd->lo, fd->hi, dst);
+			break;
+		case FIELD_ENUM:
+			r = get_enum(c, it, p, fd->what, fd->names, fd->name_count,
+			             dst);
+			break;
+		case FIELD_METHOD:
+			while (nmethods < COUNT(methods) &&
+			       sss_method_name(nmethods)) {
+				methods[nmethods].name = sss_method_name(nmethods);
+				methods[nmethods].value = nmethods;
+				nmethods++;
+			}
+			r = get_enum(c, it, p, "method", methods, nmethods, dst);
+			break;
+		default:
+			break;
+		}
+		if (r)
+			return r;
+	}
+	return SSS_OK;
+}
+
+#define AT(type, member) offsetof(type, member)
+#define ENUM(table, noun) .what = noun, .names = table, \
+                          .name_count = COUNT(table)
+
 /* ------------------------------------------------------------ camera */
 
-enum {
-	C_TYPE, C_LENS, C_SENSOR_WIDTH, C_SENSOR_HEIGHT, C_SENSOR_FIT,
-	C_SHIFT_X, C_SHIFT_Y, C_ORTHO_SCALE, C_CLIP_START, C_CLIP_END,
-	C_PIXEL_ASPECT_X, C_PIXEL_ASPECT_Y, C_COUNT
+#define CAM(k, t, member) .key = k, .profile = -1, .type = t, \
+                          .offset = AT(sss_camera, member)
+static const field camera_fields[] = {
+	{CAM("type", FIELD_ENUM, type), ENUM(camera_types, "camera type")},
+	{CAM("lens", FIELD_F64, lens_mm), .range = POSITIVE},
+	{CAM("sensor_width", FIELD_F64, sensor_width_mm), .range = POSITIVE},
+	{CAM("sensor_height", FIELD_F64, sensor_height_mm), .range = POSITIVE},
+	{CAM("sensor_fit", FIELD_ENUM, sensor_fit),
+	 ENUM(sensor_fits, "sensor fit")},
+	{CAM("shift_x", FIELD_F64, shift_x), .range = ANY},
+	{CAM("shift_y", FIELD_F64, shift_y), .range = ANY},
+	{CAM("ortho_scale", FIELD_F64, ortho_scale), .range = POSITIVE},
+	{.key = "clip_start", .type = FIELD_SPECIAL},
+	{.key = "clip_end", .type = FIELD_SPECIAL},
+	{CAM("pixel_aspect_x", FIELD_F64, pixel_aspect_x), .range = POSITIVE},
+	{CAM("pixel_aspect_y", FIELD_F64, pixel_aspect_y), .range = POSITIVE},
 };
-static const char *const camera_keys[C_COUNT] = {
-	"type", "lens", "sensor_width", "sensor_height", "sensor_fit",
-	"shift_x", "shift_y", "ortho_scale", "clip_start", "clip_end",
-	"pixel_aspect_x", "pixel_aspect_y",
-};
+enum { C_CLIP_START = 8, C_CLIP_END = 9, C_COUNT = COUNT(camera_fields) };
 
 static sss_result parse_camera(ctx *c, const cJSON *obj, sss_camera *cam)
 {
 	if (!cJSON_IsObject(obj))
 		return type_error(c, "camera", "an object", obj);
 	const cJSON *f[C_COUNT];
-	sss_result r = scan(c, obj, "camera", camera_keys, C_COUNT, f);
-	if (r)
-		return r;
+	sss_result r = scan(c, obj, "camera", camera_fields, C_COUNT, f);
 	/* Every given length is checked even when the camera type does not
 	 * use it: a bad value is a bug in whatever wrote the file. */
-	struct {
-		int key;
-		double *field;
-		span s;
-	} nums[] = {
-		{C_LENS, &cam->lens_mm, POSITIVE},
-		{C_SENSOR_WIDTH, &cam->sensor_width_mm, POSITIVE},
-		{C_SENSOR_HEIGHT, &cam->sensor_height_mm, POSITIVE},
-		{C_SHIFT_X, &cam->shift_x, ANY},
-		{C_SHIFT_Y, &cam->shift_y, ANY},
-		{C_ORTHO_SCALE, &cam->ortho_scale, POSITIVE},
-		{C_PIXEL_ASPECT_X, &cam->pixel_aspect_x, POSITIVE},
-		{C_PIXEL_ASPECT_Y, &cam->pixel_aspect_y, POSITIVE},
-	};
-	char p[PATH_LEN];
-	if (f[C_TYPE] && (r = get_enum(c, f[C_TYPE], "camera.type",
-	                               "camera type", camera_types,
-	                               COUNT(camera_types), &cam->type)))
-		return r;
-	for (int i = 0; i < COUNT(nums); i++) {
-		if (!f[nums[i].key])
-			continue;
-		join(p, "camera", camera_keys[nums[i].key]);
-		if ((r = get_f64(c, f[nums[i].key], p, nums[i].s, nums[i].field)))
-			return r;
-	}
-	if (f[C_SENSOR_FIT] &&
-	    (r = get_enum(c, f[C_SENSOR_FIT], "camera.sensor_fit", "sensor fit",
-	                  sensor_fits, COUNT(sensor_fits), &cam->sensor_fit)))
+	if (r || (r = parse_fields(c, "camera", camera_fields, C_COUNT, f, cam)))
 		return r;
 	/* Clipping is not stored: the background is told by
 	 * background_depth, since Blender writes 1e10 there whatever clip_end
 	 * says. The values are still checked like Blender's. */
 	double clip_start = 0.0, clip_end = 0.0;
 	if (f[C_CLIP_START] && (r = get_f64(c, f[C_CLIP_START],
-	                                    "camera.clip_start", POSITIVE,
-	                                    &clip_start)))
+	                                    "camera.clip_start",
+	                                    (span)POSITIVE, &clip_start)))
 		return r;
 	if (f[C_CLIP_END] && (r = get_f64(c, f[C_CLIP_END], "camera.clip_end",
-	                                  POSITIVE, &clip_end)))
+	                                  (span)POSITIVE, &clip_end)))
 		return r;
 	if (f[C_CLIP_START] && f[C_CLIP_END] && !(clip_end > clip_start))
 		return FAIL(c, "camera.clip_end: %g must be greater than "
@@ -415,43 +473,76 @@ static sss_result parse_camera(ctx *c, const cJSON *obj, sss_camera *cam)
 
 /* ---------------------------------------------------------- materials */
 
-enum {
-	M_PASS_INDEX, M_NAME, M_PROFILE, M_STRENGTH, M_TEXTURING, M_TAPS,
-	M_RADIUS, M_MAPPING, M_ALBEDO,
-	M_GAUSSIANS, M_SCALE,
-	M_WIDTH, M_STRENGTH_RGB, M_FALLOFF,
-	M_SCATTER_SCALE, M_BALANCE, M_NEAR_SIGMA, M_FAR_SIGMA,
-	M_TRANSMISSION, M_T_STRENGTH, M_T_COLOR, M_T_DISTANCE,
-	M_T_TRANSLUCENCY, M_T_DISTORTION, M_T_POWER, M_T_SCALE, M_T_AMBIENT,
-	M_THICKNESS_SCALE,
-	M_CALIBRATION,
-	M_COUNT
+/* The keys of a "materials" entry. .profile: the profile a key belongs to
+ * (-1: every profile reads it); another profile's keys are warned about
+ * and ignored. */
+#define MAT(k, p, t, member) .key = k, .profile = p, .type = t, \
+                             .offset = AT(sss_material, member)
+#define ALL (-1)
+#define BURLEY SSS_PROFILE_BURLEY
+#define GAUSS SSS_PROFILE_GAUSSIANS
+#define JIMENEZ SSS_PROFILE_JIMENEZ
+#define NEARFAR SSS_PROFILE_NEAR_FAR
+static const field material_fields[] = {
+	{.key = "pass_index", .profile = ALL, .type = FIELD_SPECIAL},
+	{.key = "name", .profile = ALL, .type = FIELD_SPECIAL},
+	{.key = "profile", .profile = ALL, .type = FIELD_SPECIAL},
+	{MAT("strength", ALL, FIELD_F32, strength), .range = UNIT},
+	{MAT("texturing", ALL, FIELD_ENUM, texturing),
+	 ENUM(texturings, "texturing")},
+	{MAT("taps", ALL, FIELD_INT, taps), .lo = 0, .hi = 4097},
+	{MAT("radius", BURLEY, FIELD_VEC3, radius), .range = NONNEG_F},
+	{MAT("mapping", BURLEY, FIELD_ENUM, burley_mapping),
+	 ENUM(mappings, "mapping")},
+	{MAT("albedo", BURLEY, FIELD_VEC3, albedo), .range = UNIT},
+	{.key = "gaussians", .profile = GAUSS, .type = FIELD_SPECIAL},
+	{MAT("scale", GAUSS, FIELD_F32, gaussian_scale), .range = NONNEG_F},
+	{MAT("width", JIMENEZ, FIELD_F32, jimenez_width), .range = NONNEG_F},
+	{MAT("strength_rgb", JIMENEZ, FIELD_VEC3, jimenez_strength),
+	 .range = UNIT},
+	{MAT("falloff", JIMENEZ, FIELD_VEC3, jimenez_falloff),
+	 .range = POSITIVE_F},
+	{MAT("scatter_scale", NEARFAR, FIELD_F32, scatter_scale),
+	 .range = NONNEG_F},
+	{MAT("balance", NEARFAR, FIELD_F32, near_far_balance), .range = UNIT},
+	{MAT("near_sigma", NEARFAR, FIELD_VEC3, near_sigma),
+	 .range = POSITIVE_F},
+	{MAT("far_sigma", NEARFAR, FIELD_VEC3, far_sigma), .range = POSITIVE_F},
+	{MAT("transmission", ALL, FIELD_ENUM, transmission),
+	 ENUM(transmissions, "transmission model")},
+	{MAT("transmission_strength", ALL, FIELD_F32, transmission_strength),
+	 .range = UNIT},
+	{MAT("transmission_color", ALL, FIELD_VEC3, transmission_color),
+	 .range = UNIT},
+	{MAT("transmission_distance", ALL, FIELD_F32, transmission_distance),
+	 .range = POSITIVE_F},
+	{MAT("transmission_translucency", ALL, FIELD_F32,
+	     transmission_translucency), .range = UNIT},
+	{MAT("transmission_distortion", ALL, FIELD_F32,
+	     transmission_distortion), .range = UNIT},
+	{MAT("transmission_power", ALL, FIELD_F32, transmission_power),
+	 .range = POSITIVE_F},
+	{MAT("transmission_scale", ALL, FIELD_F32, transmission_scale),
+	 .range = NONNEG_F},
+	{MAT("transmission_ambient", ALL, FIELD_F32, transmission_ambient),
+	 .range = NONNEG_F},
+	{MAT("thickness_scale", ALL, FIELD_F32, thickness_scale),
+	 .range = NONNEG_F},
+	{MAT("calibration", ALL, FIELD_ENUM, calibration),
+	 ENUM(calibrations, "calibration")},
 };
-static const char *const material_keys[M_COUNT] = {
-	"pass_index", "name", "profile", "strength", "texturing", "taps",
-	"radius", "mapping", "albedo",
-	"gaussians", "scale",
-	"width", "strength_rgb", "falloff",
-	"scatter_scale", "balance", "near_sigma", "far_sigma",
-	"transmission", "transmission_strength", "transmission_color",
-	"transmission_distance", "transmission_translucency",
-	"transmission_distortion", "transmission_power", "transmission_scale",
-	"transmission_ambient", "thickness_scale",
-	"calibration",
-};
-/* The profile a key belongs to; -1 for keys every profile reads. */
-static const int8_t key_profile[M_COUNT] = {
-	-1, -1, -1, -1, -1, -1,
-	SSS_PROFILE_BURLEY, SSS_PROFILE_BURLEY, SSS_PROFILE_BURLEY,
-	SSS_PROFILE_GAUSSIANS, SSS_PROFILE_GAUSSIANS,
-	SSS_PROFILE_JIMENEZ, SSS_PROFILE_JIMENEZ, SSS_PROFILE_JIMENEZ,
-	SSS_PROFILE_NEAR_FAR, SSS_PROFILE_NEAR_FAR, SSS_PROFILE_NEAR_FAR,
-	SSS_PROFILE_NEAR_FAR,
-	-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, /* transmission: every kind */
-	-1, /* calibration */
-};
+#undef ALL
+#undef BURLEY
+#undef GAUSS
+#undef JIMENEZ
+#undef NEARFAR
+enum { M_PASS_INDEX, M_NAME, M_PROFILE, M_GAUSSIANS = 9,
+       M_COUNT = COUNT(material_fields) };
 
-static const char *const gaussian_keys[2] = {"variance", "weight"};
+static const field gaussian_fields[2] = {
+	{.key = "variance", .type = FIELD_SPECIAL},
+	{.key = "weight", .type = FIELD_SPECIAL},
+};
 
 static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
                                   sss_material *m)
@@ -475,16 +566,16 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 		if (!cJSON_IsObject(g))
 			return type_error(c, gp, "an object", g);
 		const cJSON *f[2];
-		sss_result r = scan(c, g, gp, gaussian_keys, 2, f);
+		sss_result r = scan(c, g, gp, gaussian_fields, 2, f);
 		if (r)
 			return r;
 		for (int k = 0; k < 2; k++) {
-			join(p, gp, gaussian_keys[k]);
+			join(p, gp, gaussian_fields[k].key);
 			if (!f[k])
 				return FAIL(c, "%s: missing (required)", p);
-			r = k == 0 ? get_f32(c, f[k], p, POSITIVE_F,
+			r = k == 0 ? get_f32(c, f[k], p, (span)POSITIVE_F,
 			                     &m->gaussian_variance[i])
-			           : get_vec3(c, f[k], p, NONNEG_F,
+			           : get_vec3(c, f[k], p, (span)NONNEG_F,
 			                      m->gaussian_weight[i]);
 			if (r)
 				return r;
@@ -515,7 +606,7 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	if (!cJSON_IsObject(obj))
 		return type_error(c, mp, "an object", obj);
 	const cJSON *f[M_COUNT];
-	sss_result r = scan(c, obj, mp, material_keys, M_COUNT, f);
+	sss_result r = scan(c, obj, mp, material_fields, M_COUNT, f);
 	if (r)
 		return r;
 
@@ -548,8 +639,9 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	/* Another profile's keys are most likely left over from switching
 	 * profiles: said, not applied. */
 	for (int k = 0; k < M_COUNT; k++) {
-		if (f[k] && key_profile[k] >= 0 && key_profile[k] != kind) {
-			join(p, mp, material_keys[k]);
+		if (f[k] && material_fields[k].profile >= 0 &&
+		    material_fields[k].profile != kind) {
+			join(p, mp, material_fields[k].key);
 			warn(c, "warning: key '%s' is not used by profile '%s' "
 			     "(ignored)", p, profile_name(kind));
 			f[k] = NULL;
@@ -560,68 +652,7 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 		join(p, mp, "name");
 		return type_error(c, p, "a string", f[M_NAME]);
 	}
-
-	/* Every remaining key, in table order. */
-	struct {
-		int key;
-		float *field;
-		span s;
-		int vec3;
-	} nums[] = {
-		{M_STRENGTH, &m->strength, UNIT, 0},
-		{M_RADIUS, m->radius, NONNEG_F, 1},
-		{M_ALBEDO, m->albedo, UNIT, 1},
-		{M_SCALE, &m->gaussian_scale, NONNEG_F, 0},
-		{M_WIDTH, &m->jimenez_width, NONNEG_F, 0},
-		{M_STRENGTH_RGB, m->jimenez_strength, UNIT, 1},
-		{M_FALLOFF, m->jimenez_falloff, POSITIVE_F, 1},
-		{M_SCATTER_SCALE, &m->scatter_scale, NONNEG_F, 0},
-		{M_BALANCE, &m->near_far_balance, UNIT, 0},
-		{M_NEAR_SIGMA, m->near_sigma, POSITIVE_F, 1},
-		{M_FAR_SIGMA, m->far_sigma, POSITIVE_F, 1},
-		{M_T_STRENGTH, &m->transmission_strength, UNIT, 0},
-		{M_T_COLOR, m->transmission_color, UNIT, 1},
-		{M_T_DISTANCE, &m->transmission_distance, POSITIVE_F, 0},
-		{M_T_TRANSLUCENCY, &m->transmission_translucency, UNIT, 0},
-		{M_T_DISTORTION, &m->transmission_distortion, UNIT, 0},
-		{M_T_POWER, &m->transmission_power, POSITIVE_F, 0},
-		{M_T_SCALE, &m->transmission_scale, NONNEG_F, 0},
-		{M_T_AMBIENT, &m->transmission_ambient, NONNEG_F, 0},
-		{M_THICKNESS_SCALE, &m->thickness_scale, NONNEG_F, 0},
-	};
-	for (int k = 0; k < COUNT(nums); k++) {
-		const cJSON *it = f[nums[k].key];
-		if (!it)
-			continue;
-		join(p, mp, material_keys[nums[k].key]);
-		r = nums[k].vec3 ? get_vec3(c, it, p, nums[k].s, nums[k].field)
-		                 : get_f32(c, it, p, nums[k].s, nums[k].field);
-		if (r)
-			return r;
-	}
-	join(p, mp, "texturing");
-	if (f[M_TEXTURING] &&
-	    (r = get_enum(c, f[M_TEXTURING], p, "texturing", texturings,
-	                  COUNT(texturings), &m->texturing)))
-		return r;
-	join(p, mp, "taps");
-	if (f[M_TAPS] && (r = get_int(c, f[M_TAPS], p, 0, 4097, &m->taps)))
-		return r;
-	join(p, mp, "mapping");
-	if (f[M_MAPPING] &&
-	    (r = get_enum(c, f[M_MAPPING], p, "mapping", mappings,
-	                  COUNT(mappings), &m->burley_mapping)))
-		return r;
-	join(p, mp, "transmission");
-	if (f[M_TRANSMISSION] &&
-	    (r = get_enum(c, f[M_TRANSMISSION], p, "transmission model",
-	                  transmissions, COUNT(transmissions),
-	                  &m->transmission)))
-		return r;
-	join(p, mp, "calibration");
-	if (f[M_CALIBRATION] &&
-	    (r = get_enum(c, f[M_CALIBRATION], p, "calibration", calibrations,
-	                  COUNT(calibrations), &m->calibration)))
+	if ((r = parse_fields(c, mp, material_fields, M_COUNT, f, m)))
 		return r;
 	join(p, mp, "gaussians");
 	if (f[M_GAUSSIANS] && (r = parse_gaussians(c, f[M_GAUSSIANS], p, m)))
@@ -677,15 +708,26 @@ done:
 
 /* ------------------------------------------------------------ scene */
 
-enum {
-	T_VERSION, T_CAMERA, T_UNIT_SCALE, T_METHOD, T_RADIUS_SCALE, T_TAPS,
-	T_THREADS, T_BACKGROUND_DEPTH, T_MAX_SUPPORT_PX, T_MATERIALS, T_SAMPLES,
-	T_COUNT
+#define TOP(k, t, member) .key = k, .profile = -1, .type = t, \
+                          .offset = AT(sss_scene, member)
+static const field top_fields[] = {
+	{.key = "version", .type = FIELD_SPECIAL},
+	{.key = "camera", .type = FIELD_SPECIAL},
+	{TOP("unit_scale", FIELD_F64, camera.unit_scale), .range = POSITIVE},
+	/* Bounds as sss_apply checks them. */
+	{TOP("method", FIELD_METHOD, options.method)},
+	{TOP("radius_scale", FIELD_F32, options.radius_scale),
+	 .range = NONNEG_F},
+	{TOP("taps", FIELD_INT, options.taps), .lo = 1, .hi = 4097},
+	{TOP("threads", FIELD_INT, options.num_threads), .lo = 0, .hi = 256},
+	{TOP("background_depth", FIELD_F64, options.background_depth),
+	 .range = POSITIVE},
+	{TOP("max_support_px", FIELD_INT, options.max_support_px), .lo = 1,
+	 .hi = INT32_MAX},
+	{.key = "materials", .type = FIELD_SPECIAL},
+	{TOP("samples", FIELD_INT, options.samples), .lo = 1, .hi = 4096},
 };
-static const char *const top_keys[T_COUNT] = {
-	"version", "camera", "unit_scale", "method", "radius_scale", "taps",
-	"threads", "background_depth", "max_support_px", "materials", "samples",
-};
+enum { T_VERSION, T_CAMERA, T_MATERIALS = 9, T_COUNT = COUNT(top_fields) };
 
 static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 {
@@ -695,11 +737,9 @@ static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 		            describe(root, buf, sizeof buf));
 	}
 	const cJSON *f[T_COUNT];
-	sss_result r = scan(c, root, "", top_keys, T_COUNT, f);
+	sss_result r = scan(c, root, "", top_fields, T_COUNT, f);
 	if (r)
 		return r;
-	sss_camera *cam = &sc->camera;
-	sss_options *opt = &sc->options;
 
 	if (f[T_VERSION]) {
 		int32_t version = 1;
@@ -711,41 +751,16 @@ static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 			                 "version: %d is newer than this library "
 			                 "reads (1)", (int)version);
 	}
-	if (f[T_CAMERA] && (r = parse_camera(c, f[T_CAMERA], cam)))
+	if (f[T_CAMERA] && (r = parse_camera(c, f[T_CAMERA], &sc->camera)))
 		return r;
-	if (f[T_UNIT_SCALE] && (r = get_f64(c, f[T_UNIT_SCALE], "unit_scale",
-	                                    POSITIVE, &cam->unit_scale)))
-		return r;
-	/* Bounds as sss_apply checks them. */
-	if (f[T_METHOD] && (r = get_enum(c, f[T_METHOD], "method", "method",
-	                                 methods, COUNT(methods), &opt->method)))
-		return r;
-	if (f[T_RADIUS_SCALE] &&
-	    (r = get_f32(c, f[T_RADIUS_SCALE], "radius_scale", NONNEG_F,
-	                 &opt->radius_scale)))
-		return r;
-	if (f[T_TAPS] && (r = get_int(c, f[T_TAPS], "taps", 1, 4097,
-	                              &opt->taps)))
-		return r;
-	if (f[T_THREADS] && (r = get_int(c, f[T_THREADS], "threads", 0, 256,
-	                                 &opt->num_threads)))
-		return r;
-	if (f[T_BACKGROUND_DEPTH] &&
-	    (r = get_f64(c, f[T_BACKGROUND_DEPTH], "background_depth", POSITIVE,
-	                 &opt->background_depth)))
-		return r;
-	if (f[T_MAX_SUPPORT_PX] &&
-	    (r = get_int(c, f[T_MAX_SUPPORT_PX], "max_support_px", 1, INT32_MAX,
-	                 &opt->max_support_px)))
-		return r;
-	if (f[T_SAMPLES] && (r = get_int(c, f[T_SAMPLES], "samples", 1, 4096,
-	                                 &opt->samples)))
+	if ((r = parse_fields(c, "", top_fields, T_COUNT, f, sc)))
 		return r;
 	if (f[T_MATERIALS] && (r = parse_materials(c, f[T_MATERIALS], sc)))
 		return r;
 	/* The camera model's own check, as sss_apply runs it. */
 	sss__projection proj;
-	return sss__projection_make(cam, 1, 1, &proj, c->err, c->err_len);
+	return sss__projection_make(&sc->camera, 1, 1, &proj, c->err,
+	                            c->err_len);
 }
 
 /* cJSON's whitespace: every byte up to the space. */

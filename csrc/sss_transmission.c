@@ -52,6 +52,7 @@ typedef struct tmat {
 	 * or a Gaussian sum (n > 0) */
 	int n[3];
 	double d[3];
+	double mfp[3];                   /* the slab's mean free path */
 	double sigma_tr[3], a[3], zb[3]; /* slab_make */
 	double var[3][SSS_MAX_GAUSSIANS], w[3][SSS_MAX_GAUSSIANS];
 	/* jimenez: s (mm of d'Eon's profile) per scene unit of thickness */
@@ -67,58 +68,6 @@ struct sss__transmission {
 	sss_image back_dir, back_ind, thickness, facing;
 	tmat *mats; /* material_count entries */
 };
-
-/* ------------------------------------------------------------ validation */
-
-static int in_range(float v, float lo, float hi)
-{
-	return isfinite(v) && v >= lo && v <= hi;
-}
-
-sss_result sss__transmission_validate(const sss_material *mat, char *errbuf,
-                                      size_t errbuf_len)
-{
-	int32_t idx = mat->pass_index;
-	if (mat->transmission < SSS_TRANSMISSION_OFF ||
-	    mat->transmission > SSS_TRANSMISSION_FAST)
-		return FAIL("material %d: unknown transmission model %d", idx,
-		            mat->transmission);
-	if (mat->transmission == SSS_TRANSMISSION_OFF)
-		return SSS_OK;
-	static const char rgb[3] = {'r', 'g', 'b'};
-	if (!in_range(mat->transmission_strength, 0.0f, 1.0f))
-		return FAIL("material %d: transmission_strength %g must be in "
-		            "[0, 1]", idx, (double)mat->transmission_strength);
-	for (int c = 0; c < 3; c++)
-		if (!in_range(mat->transmission_color[c], 0.0f, 1.0f))
-			return FAIL("material %d: transmission_color.%c = %g must be "
-			            "in [0, 1]", idx, rgb[c],
-			            (double)mat->transmission_color[c]);
-	if (!in_range(mat->transmission_distance, 0.0f, 1e30f) ||
-	    !(mat->transmission_distance > 0.0f))
-		return FAIL("material %d: transmission_distance %g must be > 0 "
-		            "(metres)", idx, (double)mat->transmission_distance);
-	if (!in_range(mat->transmission_translucency, 0.0f, 1.0f))
-		return FAIL("material %d: transmission_translucency %g must be in "
-		            "[0, 1]", idx, (double)mat->transmission_translucency);
-	if (!in_range(mat->transmission_distortion, 0.0f, 1.0f))
-		return FAIL("material %d: transmission_distortion %g must be in "
-		            "[0, 1]", idx, (double)mat->transmission_distortion);
-	if (!in_range(mat->transmission_power, 0.0f, 1e30f) ||
-	    !(mat->transmission_power > 0.0f))
-		return FAIL("material %d: transmission_power %g must be > 0", idx,
-		            (double)mat->transmission_power);
-	if (!in_range(mat->transmission_scale, 0.0f, 1e30f))
-		return FAIL("material %d: transmission_scale %g must be >= 0", idx,
-		            (double)mat->transmission_scale);
-	if (!in_range(mat->transmission_ambient, 0.0f, 1e30f))
-		return FAIL("material %d: transmission_ambient %g must be >= 0",
-		            idx, (double)mat->transmission_ambient);
-	if (!in_range(mat->thickness_scale, 0.0f, 1e30f))
-		return FAIL("material %d: thickness_scale %g must be >= 0", idx,
-		            (double)mat->thickness_scale);
-	return SSS_OK;
-}
 
 /* ----------------------------------------------------------------- models */
 
@@ -182,29 +131,6 @@ static double rw_alpha(double A)
 	return a < 0.0 ? 0.0 : a > 0.999999 ? 0.999999 : a;
 }
 
-/* Cycles' mean free path over the radius (bssrdf_setup_radius):
- * sqrt(3 (1 - a')), a' inverting Jensen's dipole reflectance at IOR 1.4. */
-static double rw_mfp_over_radius(double A)
-{
-	const double eta = 1.4;
-	double f_dr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
-	double k = 4.0 / 3.0 * (1.0 + f_dr) / (1.0 - f_dr);
-	if (!(A >= 1e-4)) /* Cycles' limits (bssrdf_dipole_compute_alpha_prime) */
-		return sqrt(3.0);
-	if (A >= 0.995)
-		return sqrt(3.0 * (1.0 - 0.999999));
-	double lo = 0.0, hi = 1.0;
-	for (int i = 0; i < 48; i++) {
-		double mid = 0.5 * (lo + hi);
-		double s = sqrt(3.0 * (1.0 - mid));
-		if (0.5 * mid * (1.0 + exp(-k * s)) * exp(-s) < A)
-			lo = mid;
-		else
-			hi = mid;
-	}
-	return sqrt(3.0 * (1.0 - 0.5 * (lo + hi)));
-}
-
 /* The slab's sigma_tr, a and zb for one channel: mean free path l (scene
  * units, > 0) and surface albedo A. */
 static void slab_make(double l, double A, double *sigma_tr, double *a,
@@ -266,12 +192,13 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 			double l = mat->burley_mapping ==
 			           SSS_BURLEY_CYCLES_RANDOM_WALK
 			           ? (double)mat->radius[c] * len *
-			             rw_mfp_over_radius(A)
+			             sss__cycles_rw_mfp_over_radius(A)
 			           : m->d[c] * (1.9 - A + 3.5 * (A - 0.8) * (A - 0.8));
 			if (!(l > 0.0) || !isfinite(l)) {
 				m->d[c] = 0.0;
 				continue;
 			}
+			m->mfp[c] = l;
 			slab_make(l, A, &m->sigma_tr[c], &m->a[c], &m->zb[c]);
 		}
 		break;
@@ -358,25 +285,120 @@ static void tmat_eval(const tmat *m, double t, double facing, double out[3])
 	}
 }
 
+/* A valid copy of mat (any table key) made into a tmat in metres. */
+static sss_result tmat_in_metres(const sss_material *mat, sss_material *v,
+                                 tmat *m)
+{
+	if (!mat)
+		return SSS_ERR_INVALID_ARGUMENT;
+	*v = *mat;
+	v->pass_index = 1; /* the table key plays no part */
+	sss_result r = sss_material_validate(v, NULL, 0);
+	if (r)
+		return r;
+	sss_options opt;
+	sss_options_default(&opt);
+	tmat_make(v, &opt, 1.0, m);
+	return SSS_OK;
+}
+
 sss_result sss_transmittance(const sss_material *mat, double thickness,
                              double facing, double out[3])
 {
-	if (!mat || !out)
-		return SSS_ERR_INVALID_ARGUMENT;
-	sss_material v = *mat;
-	v.pass_index = 1; /* the table key plays no part */
-	sss_result r = sss_material_validate(&v, NULL, 0);
+	sss_material v;
+	tmat m;
+	sss_result r = out ? tmat_in_metres(mat, &v, &m)
+	                   : SSS_ERR_INVALID_ARGUMENT;
 	if (r)
 		return r;
 	out[0] = out[1] = out[2] = 0.0;
 	if (!(thickness >= 0.0))
 		return SSS_OK; /* NaN or negative: unknown, nothing crosses */
-	sss_options opt;
-	sss_options_default(&opt);
-	tmat m;
-	tmat_make(&v, &opt, 1.0, &m);
 	double t = m.thickness_scale == 0.0 ? 0.0 : thickness * m.thickness_scale;
 	tmat_eval(&m, t, facing, out);
+	return SSS_OK;
+}
+
+/* The thickness where the slab lets less than `level` through: at most
+ * 100 mean free paths (without absorption it falls only as a / L). */
+static double slab_reach(const tmat *m, int c, double level)
+{
+	double hi = 100.0 * m->mfp[c];
+	if (slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], hi) >= level)
+		return hi;
+	double lo = 0.0;
+	for (int i = 0; i < 60; i++) {
+		double mid = 0.5 * (lo + hi);
+		if (slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], mid) >= level)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	return hi;
+}
+
+sss_result sss_transmission_reach(const sss_material *mat, double *metres)
+{
+	sss_material v;
+	tmat m;
+	sss_result r = metres ? tmat_in_metres(mat, &v, &m)
+	                      : SSS_ERR_INVALID_ARGUMENT;
+	if (r)
+		return r;
+	double reach = 0.0;
+	switch (m.model) {
+	case SSS_TRANSMISSION_BURLEY:
+		if (v.kind != SSS_PROFILE_BURLEY) /* Gaussian sums: 1e-5 left */
+			return sss_material_support(&v, metres);
+		for (int c = 0; c < 3; c++)
+			if (m.n[c] == 0 && m.d[c] > 0.0) {
+				double s = slab_reach(&m, c, 0.01);
+				reach = s > reach ? s : reach;
+			}
+		break;
+	case SSS_TRANSMISSION_JIMENEZ: {
+		/* d'Eon's sum w e^{-s^2/v} is below 1 % at s = 5 mm. */
+		double k = 8.25 * (1.0 - (double)v.transmission_translucency);
+		if (!(k > 0.0))
+			return sss_material_support(&v, metres);
+		reach = 5.0 * (double)v.jimenez_width / k;
+		break;
+	}
+	case SSS_TRANSMISSION_BEER_LAMBERT: {
+		double c = v.transmission_color[0];
+		for (int i = 1; i < 3; i++)
+			c = v.transmission_color[i] > c ? v.transmission_color[i] : c;
+		c = c < 1e-3 ? 1e-3 : c > 0.999 ? 0.999 : c;
+		reach = m.distance * log(0.01) / log(c);
+		break;
+	}
+	case SSS_TRANSMISSION_FAST: /* gone at the distance */
+		reach = m.distance;
+		break;
+	default:
+		break;
+	}
+	*metres = reach;
+	return SSS_OK;
+}
+
+sss_result sss_transmission_slab(const sss_material *mat, double sigma_tr[3],
+                                 double a[3], double zb[3])
+{
+	sss_material v;
+	tmat m;
+	sss_result r = sigma_tr && a && zb ? tmat_in_metres(mat, &v, &m)
+	                                   : SSS_ERR_INVALID_ARGUMENT;
+	if (r)
+		return r;
+	if (m.model != SSS_TRANSMISSION_BURLEY || v.kind != SSS_PROFILE_BURLEY)
+		return SSS_ERR_UNSUPPORTED;
+	for (int c = 0; c < 3; c++) {
+		int slab = m.n[c] == 0 && m.d[c] > 0.0;
+		sigma_tr[c] = slab ? m.sigma_tr[c] : 0.0;
+		a[c] = slab ? m.a[c] : 0.0;
+		zb[c] = slab ? m.zb[c] : 0.0;
+	}
 	return SSS_OK;
 }
 

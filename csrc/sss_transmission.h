@@ -5,16 +5,6 @@
 
 #include "sss.h"
 
-/* d'Eon & Luebke 2007 six-Gaussian skin (sss_material.c): variances in
- * mm^2 and RGB weights, each channel summing to 1. */
-extern const float sss__deon_variance[6];
-extern const float sss__deon_weight[6][3];
-
-/* Checks a material's transmission fields (called by
- * sss_material_validate); errors name the field. */
-sss_result sss__transmission_validate(const sss_material *mat,
-                                      char *errbuf, size_t errbuf_len);
-
 typedef struct sss__transmission sss__transmission;
 
 /* Checks the back-light passes against the image size and the outputs,

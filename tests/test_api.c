@@ -227,9 +227,41 @@ static void test_helpers_reject(void)
 	CHECK_STATUS("burley-d-1", SSS_ERR_INVALID_ARGUMENT, sss_burley_d(&g, d));
 }
 
+/* The methods are named in one place: every enum value has a distinct
+ * name and a summary, the list ends at the first NULL, and the scene
+ * parser and sss_apply accept exactly those. */
+static void test_method_names(void)
+{
+	int32_t n = 0;
+	while (sss_method_name(n))
+		n++;
+	CHECK("methods.count", n == SSS_METHOD_REFERENCE + 1, "%d", n);
+	CHECK("methods.out-of-range", !sss_method_name(-1) &&
+	      !sss_method_summary(-1) && !sss_method_summary(n), "not NULL");
+	for (int32_t m = 0; m < n; m++) {
+		CHECK("methods.summary", sss_method_summary(m) &&
+		      strlen(sss_method_summary(m)) > 10, "%d", m);
+		for (int32_t k = 0; k < m; k++)
+			CHECK("methods.distinct", strcmp(sss_method_name(m),
+			      sss_method_name(k)) != 0, "%s", sss_method_name(m));
+		char json[128], err[256];
+		snprintf(json, sizeof json, "{\"method\": \"%s\"}",
+		         sss_method_name(m));
+		sss_scene *sc = NULL;
+		CHECK_STATUS("methods.parsed", SSS_OK,
+		             sss_scene_parse(json, strlen(json), &sc, NULL, 0, err,
+		                             sizeof err));
+		CHECK("methods.parsed-value", sc &&
+		      sss_scene_options(sc)->method == m, "%s",
+		      sss_method_name(m));
+		sss_scene_free(sc);
+	}
+}
+
 int main(void)
 {
 	test_status_tables();
+	test_method_names();
 	test_struct_sizes();
 	test_material_validation();
 	test_apply_arguments();

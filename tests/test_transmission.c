@@ -679,9 +679,85 @@ static void test_process(void)
 	rmdir(dir);
 }
 
+/* What the add-on asks instead of computing it: how thick a part can be
+ * before nothing crosses it (its thickness measurement's reach), and the
+ * slab's coefficients (its shader evaluates the same T). */
+static void test_reach_and_slab(void)
+{
+	static const int32_t models[] = {
+		SSS_TRANSMISSION_BURLEY, SSS_TRANSMISSION_JIMENEZ,
+		SSS_TRANSMISSION_BEER_LAMBERT, SSS_TRANSMISSION_FAST};
+	static const char *names[] = {"burley", "jimenez", "beer", "fast"};
+	for (int k = 0; k < 4; k++) {
+		char id[64];
+		sss_material m = skin(models[k], 0.01f);
+		m.transmission_color[0] = 0.9f;
+		m.transmission_color[1] = 0.5f;
+		m.transmission_color[2] = 0.3f;
+		double reach = -1.0, T[3], Th[3], T0[3];
+		snprintf(id, sizeof id, "reach.%s.ok", names[k]);
+		CHECK_STATUS(id, SSS_OK, sss_transmission_reach(&m, &reach));
+		sss_transmittance(&m, 0.0, 1.0, T0);
+		sss_transmittance(&m, reach, 1.0, T);
+		sss_transmittance(&m, 0.5 * reach, 1.0, Th);
+		int below = 1, before = 0;
+		for (int c = 0; c < 3; c++) {
+			double gain = m.transmission_strength *
+			              (models[k] == SSS_TRANSMISSION_BEER_LAMBERT
+			               ? 1.0 : m.transmission_color[c]);
+			below &= T[c] <= 0.0101 * gain;
+			before |= Th[c] > T[c] && T0[c] > Th[c];
+		}
+		snprintf(id, sizeof id, "reach.%s.nothing-beyond", names[k]);
+		CHECK(id, reach > 0.0 && below, "reach %g m: T %g %g %g", reach,
+		      T[0], T[1], T[2]);
+		snprintf(id, sizeof id, "reach.%s.light-before", names[k]);
+		CHECK(id, before, "T(reach / 2) %g", Th[0]);
+	}
+	sss_material off = skin(SSS_TRANSMISSION_OFF, 0.01f);
+	double reach = -1.0;
+	CHECK("reach.off", sss_transmission_reach(&off, &reach) == SSS_OK &&
+	      reach == 0.0, "%g", reach);
+	off.radius[0] = -1.0f;
+	CHECK_STATUS("reach.invalid", SSS_ERR_INVALID_ARGUMENT,
+	             sss_transmission_reach(&off, &reach));
+
+	/* The slab's closed form from its coefficients is sss_transmittance. */
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	m.radius[2] = 0.0f;
+	double s[3], a[3], zb[3];
+	CHECK_STATUS("slab-coefficients.ok", SSS_OK,
+	             sss_transmission_slab(&m, s, a, zb));
+	double worst = 0.0;
+	for (int i = 0; i <= 20; i++) {
+		double t = 0.001 * i, T[3];
+		sss_transmittance(&m, t, 1.0, T);
+		for (int c = 0; c < 2; c++) {
+			double L = fmax(t + 2.0 * zb[c], 2.0 * a[c]);
+			double v = -expm1(-2.0 * s[c] * a[c]) *
+			           exp(-s[c] * (L - 2.0 * a[c])) /
+			           -expm1(-2.0 * s[c] * L);
+			worst = fmax(worst, fabs(fmin(v, 1.0) - T[c]));
+		}
+	}
+	CHECK("slab-coefficients.closed-form", worst < 1e-12, "off by %g",
+	      worst);
+	CHECK("slab-coefficients.no-medium", s[2] == 0.0 && a[2] == 0.0 &&
+	      zb[2] == 0.0 && s[0] > 0.0 && a[0] > 0.0 && zb[0] > 0.0,
+	      "%g %g %g", s[2], a[2], zb[2]);
+	m.transmission = SSS_TRANSMISSION_JIMENEZ;
+	CHECK_STATUS("slab-coefficients.not-the-slab", SSS_ERR_UNSUPPORTED,
+	             sss_transmission_slab(&m, s, a, zb));
+	sss_material_default(&m, SSS_PROFILE_GAUSSIANS);
+	m.transmission = SSS_TRANSMISSION_BURLEY;
+	CHECK_STATUS("slab-coefficients.gaussians", SSS_ERR_UNSUPPORTED,
+	             sss_transmission_slab(&m, s, a, zb));
+}
+
 int main(void)
 {
 	test_slab();
+	test_reach_and_slab();
 	test_models();
 	test_extremes();
 	test_validation();

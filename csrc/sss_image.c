@@ -1,0 +1,32 @@
+/* sss_image.c - checks of the caller's image views, shared by every
+ * stage that reads a pass. */
+#include "sss_internal.h"
+
+#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
+
+sss_result sss__check_image(const char *name, const sss_image *im,
+                            int32_t min_channels, int required, int32_t w,
+                            int32_t h, char *errbuf, size_t errbuf_len)
+{
+	if (!im->data) {
+		if (required)
+			return FAILX(SSS_ERR_MISSING_PASS, "pass %s is required but "
+			             "absent", name);
+		return SSS_OK;
+	}
+	if (im->width <= 0 || im->height <= 0)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: image size %dx%d "
+		             "must be at least 1x1", name, im->width, im->height);
+	if (im->channels < min_channels)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s has %d channel(s), "
+		             "needs %d", name, im->channels, min_channels);
+	if (im->row_stride != 0 &&
+	    im->row_stride < (int64_t)im->width * im->channels)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: row_stride %lld "
+		             "is smaller than width x channels", name,
+		             (long long)im->row_stride);
+	if (im->width != w || im->height != h)
+		return FAILX(SSS_ERR_SIZE_MISMATCH, "pass %s is %dx%d but DiffDir "
+		             "is %dx%d", name, im->width, im->height, w, h);
+	return SSS_OK;
+}
