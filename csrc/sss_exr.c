@@ -338,12 +338,6 @@ static const xpass *find_render_pass(const sss_exr *exr, const char *layer,
 	return full ? find_pass(exr, layer, full) : p;
 }
 
-static int is_render_pass(const char *name, const char *pass)
-{
-	const char *full = full_pass_name(pass);
-	return strcmp(name, pass) == 0 || (full && strcmp(name, full) == 0);
-}
-
 /* A new, empty pass at the end (names copied); NULL when out of memory. */
 static xpass *append_pass(sss_exr *exr, const char *layer, size_t layer_len,
                           const char *pass, size_t pass_len)
@@ -1063,187 +1057,26 @@ sss_result sss_exr_find(const sss_exr *exr, const char *layer,
 	return SSS_OK;
 }
 
-/* ------------------------------------------------------- render passes */
+/* ------------------------------------------- for sss_render_passes.c */
 
-/* Index of the run of one-letter components `run` ("RGB") in p, or -1. */
-static int32_t find_run(const xpass *p, const char *run)
+const char *sss__exr_path(const sss_exr *exr)
 {
-	int32_t n = (int32_t)strlen(run);
-	for (int32_t at = 0; at + n <= p->count; at++) {
-		int32_t j = 0;
-		while (j < n && p->chan[at + j].comp[0] == run[j] &&
-		       p->chan[at + j].comp[1] == '\0')
-			j++;
-		if (j == n)
-			return at;
-	}
-	return -1;
-}
-
-/* Appends printf output to a fixed buffer, truncating quietly. */
-static void append(char *buf, size_t cap, const char *fmt, ...)
-	__attribute__((format(printf, 3, 4)));
-static void append(char *buf, size_t cap, const char *fmt, ...)
-{
-	size_t len = strlen(buf);
-	if (len + 1 >= cap)
-		return;
-	va_list ap;
-	va_start(ap, fmt);
-	vsnprintf(buf + len, cap - len, fmt, ap);
-	va_end(ap);
-}
-
-/* "'ViewLayer' (Combined, DiffDir), 'Other' (Depth)": every layer in file
- * order with its passes. */
-static void describe_layers(const sss_exr *exr, char *buf, size_t cap)
-{
-	for (int32_t i = 0; i < exr->pass_count; i++) {
-		const char *layer = exr->passes[i].layer;
-		int seen = 0;
-		for (int32_t j = 0; j < i && !seen; j++)
-			seen = strcmp(exr->passes[j].layer, layer) == 0;
-		if (seen)
-			continue;
-		append(buf, cap, "%s'%s' (", buf[0] ? ", " : "", layer);
-		int first = 1;
-		for (int32_t j = i; j < exr->pass_count; j++)
-			if (strcmp(exr->passes[j].layer, layer) == 0) {
-				append(buf, cap, "%s%s", first ? "" : ", ",
-				       exr->passes[j].pass[0] ? exr->passes[j].pass
-				                              : "<no pass name>");
-				first = 0;
-			}
-		append(buf, cap, ")");
-	}
-	if (!buf[0])
-		append(buf, cap, "none (the file has no channels)");
+	return exr->path;
 }
 
 static exr_result_t source_attributes(const sss_exr *exr,
                                       const exr_attribute_t ***list,
                                       int32_t *count);
 
-/* Blender stamps a Cycles render's header with "cycles.<layer>.samples"
- * and the like (EEVEE has no DiffInd pass, Cycles always can). */
-static int rendered_by_cycles(const sss_exr *exr, const char *layer)
+int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix)
 {
 	const exr_attribute_t **attrs = NULL;
 	int32_t n = 0, found = 0;
-	char prefix[MAX_NAME + 16];
-	snprintf(prefix, sizeof prefix, "cycles.%s.", layer);
 	if (source_attributes(exr, &attrs, &n) == EXR_ERR_SUCCESS)
 		for (int32_t i = 0; i < n && !found; i++)
 			found = strncmp(attrs[i]->name, prefix, strlen(prefix)) == 0;
 	free(attrs);
 	return found;
-}
-
-#define BLENDER_HINT "in Blender enable View Layer Properties > Passes > " \
-	"Light > Diffuse: Direct, Indirect, Color and Passes > Data: Z, " \
-	"Material Index"
-
-sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
-                                 sss_passes *passes, const char **layer_used,
-                                 char *errbuf, size_t errbuf_len)
-{
-	static const struct {
-		const char *name;
-		size_t offset;   /* of the sss_image in sss_passes */
-		const char *run; /* components needed, in order */
-		const char *alt; /* or this single component */
-		int required;
-	} table[] = {
-		{"DiffDir", offsetof(sss_passes, diff_dir), "RGB", NULL, 1},
-		{"DiffInd", offsetof(sss_passes, diff_ind), "RGB", NULL, 0},
-		{"DiffCol", offsetof(sss_passes, diff_col), "RGB", NULL, 1},
-		{"GlossDir", offsetof(sss_passes, gloss_dir), "RGB", NULL, 0},
-		{"GlossInd", offsetof(sss_passes, gloss_ind), "RGB", NULL, 0},
-		{"GlossCol", offsetof(sss_passes, gloss_col), "RGB", NULL, 0},
-		{"TransDir", offsetof(sss_passes, trans_dir), "RGB", NULL, 0},
-		{"TransInd", offsetof(sss_passes, trans_ind), "RGB", NULL, 0},
-		{"TransCol", offsetof(sss_passes, trans_col), "RGB", NULL, 0},
-		{"Emit", offsetof(sss_passes, emit), "RGB", NULL, 0},
-		{"Env", offsetof(sss_passes, env), "RGB", NULL, 0},
-		{"Combined", offsetof(sss_passes, combined), "RGBA", NULL, 0},
-		{"Depth", offsetof(sss_passes, depth), "Z", "V", 1},
-		{"IndexMA", offsetof(sss_passes, index_ma), "X", "V", 1},
-		{"Position", offsetof(sss_passes, position), "XYZ", NULL, 0},
-	};
-	char layers[1024] = "";
-	if (errbuf && errbuf_len)
-		errbuf[0] = '\0';
-	if (layer_used)
-		*layer_used = NULL;
-	if (!exr || !passes)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "sss_exr_render_passes: %s "
-		             "is NULL", exr ? "passes" : "exr");
-	memset(passes, 0, sizeof *passes);
-
-	/* The layer: as named, or the first (in file order) with DiffDir that
-	 * is not the back-light layer (transmission's, SSS_BACKLIGHT_LAYER). */
-	const char *use = NULL;
-	for (int32_t i = 0; i < exr->pass_count && !use; i++) {
-		const xpass *p = &exr->passes[i];
-		if (layer ? strcmp(p->layer, layer) == 0
-		          : is_render_pass(p->pass, "DiffDir") &&
-		            strcmp(p->layer, SSS_BACKLIGHT_LAYER) != 0)
-			use = p->layer;
-	}
-	if (!use) {
-		describe_layers(exr, layers, sizeof layers);
-		if (layer)
-			return FAILX(SSS_ERR_MISSING_PASS, "%s: no layer '%s'; layers "
-			             "in the file: %s", exr->path, layer, layers);
-		return FAILX(SSS_ERR_MISSING_PASS, "%s: no layer has a DiffDir "
-		             "pass; layers in the file: %s; " BLENDER_HINT,
-		             exr->path, layers);
-	}
-
-	char missing[256] = "";
-	for (size_t t = 0; t < sizeof table / sizeof *table; t++) {
-		const xpass *p = find_render_pass(exr, use, table[t].name);
-		if (!p) {
-			if (table[t].required)
-				append(missing, sizeof missing, "%s%s",
-				       missing[0] ? ", " : "", table[t].name);
-			continue;
-		}
-		int32_t at = find_run(p, table[t].run);
-		if (at < 0 && table[t].alt)
-			at = find_run(p, table[t].alt);
-		if (at < 0 && strcmp(table[t].name, "Combined") == 0)
-			continue; /* RGB only: its alpha is what libsss would use */
-		if (at < 0) {
-			memset(passes, 0, sizeof *passes);
-			return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s': pass %s "
-			             "has components '%s' but needs %s%s%s", exr->path,
-			             use, table[t].name, p->components, table[t].run,
-			             table[t].alt ? " or " : "",
-			             table[t].alt ? table[t].alt : "");
-		}
-		*(sss_image *)((char *)passes + table[t].offset) =
-			view_of(exr, p, at);
-	}
-	if (missing[0]) {
-		memset(passes, 0, sizeof *passes);
-		describe_layers(exr, layers, sizeof layers);
-		return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s' has no %s pass%s"
-		             "; layers in the file: %s; " BLENDER_HINT, exr->path,
-		             use, missing, strchr(missing, ',') ? "es" : "",
-		             layers);
-	}
-	if (!passes->diff_ind.data && rendered_by_cycles(exr, use)) {
-		memset(passes, 0, sizeof *passes);
-		return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s' is a Cycles "
-		             "render without a DiffInd pass: its indirect diffuse "
-		             "light would be lost; in Blender enable View Layer "
-		             "Properties > Passes > Light > Diffuse: Indirect",
-		             exr->path, use);
-	}
-	if (layer_used)
-		*layer_used = use;
-	return SSS_OK;
 }
 
 /* ------------------------------------------------------------ add pass */

@@ -189,6 +189,11 @@ static inline void sss__span(const sss_image *im, const char **lo,
 	                     (int64_t)im->width * im->channels);
 }
 
+/* sss_exr.c, for sss_render_passes.c: the path an image was read from, and
+ * whether its header has an attribute whose name starts with prefix. */
+const char *sss__exr_path(const sss_exr *exr);
+int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix);
+
 /* Checks one pass view against the frame size w x h (sss_apply.c);
  * absent passes (data == NULL) are fine unless required. Errors name the
  * pass. */
