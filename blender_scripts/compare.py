@@ -49,7 +49,6 @@ import argparse
 import csv
 import math
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -62,7 +61,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, HERE)
+import separable_sss  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
+from separable_sss import description, native  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -160,21 +161,10 @@ def single(ch, name):
 # ----------------------------------------------------------- the library
 
 def library_methods():
-    """[(name, code)] of the sss_method enum. Names come from csrc/sss.h
-    when the checkout has it; every code is then tried on real passes and
-    the library itself decides (SSS_ERR_UNSUPPORTED: skipped)."""
-    header = os.path.join(ROOT, "csrc", "sss.h")
-    methods = []
-    if os.path.exists(header):
-        text = open(header).read()
-        block = re.search(r"enum\s+sss_method\s*\{(.*?)\}", text, re.S)
-        if block:
-            for name, code in re.findall(
-                    r"SSS_METHOD_(\w+)\s*=\s*(\d+)", block.group(1)):
-                methods.append((name.lower().replace("_", "-"), int(code)))
-    if not methods:  # an installed add-on without the header: probe codes
-        methods = [(f"method-{c}", c) for c in range(8)]
-    return methods
+    """[(name, code)] of the library's methods, as the library names them;
+    every one is tried on real passes and the library itself decides
+    (SSS_ERR_UNSUPPORTED: skipped)."""
+    return [(name, code) for code, (name, _) in enumerate(native.methods())]
 
 
 # --------------------------------------------------------------- scenes
@@ -903,8 +893,6 @@ def main():
     maybe_reexec_with_display(args)
     os.environ.setdefault("SSS_LIB", os.path.join(ROOT, "build",
                                                   "libsss.so"))
-    import separable_sss
-    from separable_sss import native
     separable_sss.register()
     log(f"{args.name}: libsss {native.version()}, {args.resolution[0]}x"
         f"{args.resolution[1]}, random walk {args.rw_samples}, SSS off "
@@ -914,7 +902,7 @@ def main():
     bench = Bench(args)
     bench.methods = library_methods()
     scene = open_scene(args, "CYCLES")
-    bench.default_method = scene.sss.method.lower()
+    bench.default_method = description.method_name(scene.sss.method)
     run_rw(bench, args)
     run_sss_off(bench, args)
     if not args.no_denoise:

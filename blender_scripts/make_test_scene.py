@@ -7,7 +7,8 @@ Writes into DIR:
   render.exr     render-output naming (ViewLayer.DiffDir.R ...), float, ZIP
   render_half.exr  the same passes as half floats, PIZ
   fileout.exr    File Output node naming (DiffDir.R, Depth.V ...), float
-  scene.json     the scene description (camera, unit scale, SSS materials)
+  scene.json     the add-on's scene description (addon/separable_sss/
+                 description.py)
 
 The scene: a subsurface sphere (pass index 1), a glossy floor (2), a glass
 sphere (3, so the transmission passes are not empty), an emissive cube
@@ -16,7 +17,6 @@ Light clamping and denoising are off so that Blender's Combined is exactly
 the sum of its passes.
 """
 import argparse
-import json
 import os
 import shutil
 import sys
@@ -26,6 +26,8 @@ import bpy
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__))), "addon"))
+import separable_sss  # noqa: E402
+from separable_sss import analysis, description  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
 
 
@@ -141,41 +143,6 @@ def add_file_output(scene, base):
         tree.links.new(rl.outputs[socket], out.inputs[slot])
 
 
-def scene_description(scene):
-    cam = scene.camera.data
-    materials = []
-    for mat in bpy.data.materials:
-        if mat.pass_index == 0 or not compat.uses_nodes(mat):
-            continue
-        bsdf = mat.node_tree.nodes.get("Principled BSDF")
-        sss = compat.principled_sss(bsdf) if bsdf else None
-        if not sss or sss.weight <= 0.0:
-            continue
-        scale = scene.unit_settings.scale_length
-        materials.append({
-            "pass_index": mat.pass_index, "name": mat.name,
-            "profile": "burley", "mapping": "random-walk",
-            "radius": [r * scale for r in sss.radius],
-            "albedo": list(sss.color),
-        })
-    return {
-        "version": 1,
-        "camera": {
-            "type": cam.type, "lens": cam.lens,
-            "sensor_width": cam.sensor_width,
-            "sensor_height": cam.sensor_height,
-            "sensor_fit": cam.sensor_fit,
-            "shift_x": cam.shift_x, "shift_y": cam.shift_y,
-            "ortho_scale": cam.ortho_scale,
-            "clip_start": cam.clip_start, "clip_end": cam.clip_end,
-            "pixel_aspect_x": scene.render.pixel_aspect_x,
-            "pixel_aspect_y": scene.render.pixel_aspect_y,
-        },
-        "unit_scale": scene.unit_settings.scale_length,
-        "materials": materials,
-    }
-
-
 def main():
     args = parse_args()
     out = os.path.abspath(args.out)
@@ -200,8 +167,26 @@ def main():
     bpy.data.images["Render Result"].save_render(
         os.path.join(out, "render_half.exr"), scene=scene)
 
-    with open(os.path.join(out, "scene.json"), "w") as f:
-        json.dump(scene_description(scene), f, indent=2)
+    # The add-on's own description of the scene, as a render with it
+    # would write.
+    separable_sss.register()
+    try:
+        found = analysis.analyse(scene)
+        for f in found.found:
+            # Burley with the Principled BSDF's own Subsurface Radius and
+            # Color read as a mean free path, no energy calibration and no
+            # transmission: a plain blur whose energy the tests can check.
+            s = f.material.sss
+            s.profile = "BURLEY"
+            s.radius = compat.principled_sss(f.node).radius
+            s.albedo = compat.principled_sss(f.node).color
+            s.mapping = "RANDOM_WALK"
+            s.match_energy = False
+            s.transmission = "OFF"
+        description.write_description(scene, found,
+                                      os.path.join(out, "scene.json"))
+    finally:
+        separable_sss.unregister()
     print("make_test_scene: wrote", out)
 
 

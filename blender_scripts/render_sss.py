@@ -2,7 +2,7 @@
 
     blender -b SCENE.blend --python-exit-code 1 --python blender_scripts/render_sss.py -- \
         --output OUT.exr [--frames A-B] [--samples N] \
-        [--method separable|separable-exact|disk|reference] \
+        [--method NAME (one of the library's: sss --help lists them)] \
         [--resolution WxH] [--radius-scale F]
 
 Per frame: renders with material SSS switched off (restored afterwards),
@@ -25,6 +25,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "addon"))
 sys.path.insert(0, HERE)
 
 from script_cli import run_main, script_argv  # noqa: E402
+from separable_sss import native  # noqa: E402
 
 
 def parse_args():
@@ -33,8 +34,8 @@ def parse_args():
     p.add_argument("--output", required=True)
     p.add_argument("--frames", help="A-B or A (default: the current frame)")
     p.add_argument("--samples", type=int)
-    p.add_argument("--method", choices=("separable", "separable-exact", "disk",
-                                          "reference"))
+    p.add_argument("--method", choices=[name for name, _ in
+                                        native.methods()])
     p.add_argument("--resolution", help="WxH")
     p.add_argument("--radius-scale", type=float)
     args = p.parse_args(argv)

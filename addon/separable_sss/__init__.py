@@ -15,16 +15,18 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _m in (blender_compat, native, analysis,  # noqa: F821
+    for _m in (blender_compat, native, errors, analysis,  # noqa: F821
+               lighting, description, transmission,  # noqa: F821
                switch_off, nodes, pipeline,  # noqa: F821
                properties, presets, operators, ui, render_flow):  # noqa: F821
         importlib.reload(_m)
 
 import bpy  # noqa: E402,F401
 
-from . import (analysis, blender_compat, native, nodes,  # noqa: E402
-               operators, pipeline, presets, properties, render_flow,
-               switch_off, ui)
+from . import (analysis, blender_compat, description,  # noqa: E402
+               errors, lighting, native, nodes, operators, pipeline,
+               presets, properties, render_flow, switch_off, transmission,
+               ui)
 
 _modules = (properties, presets, operators, ui, render_flow)
 

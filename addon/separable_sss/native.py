@@ -1,8 +1,10 @@
 """The add-on's only ctypes module: loads libsss once, declares every
 signature it uses, checks the ABI and struct sizes, and turns status codes
 into exceptions with the library's own messages."""
+import contextlib
 import ctypes
 import importlib.util
+import json
 import os
 import threading
 
@@ -89,6 +91,17 @@ def _declare(lib):
         "sss_scene_materials": (c.c_void_p, [c.c_void_p,
                                              c.POINTER(c.c_int32)]),
         "sss_burley_d": (c.c_int32, [c.c_void_p, c.POINTER(c.c_double)]),
+        "sss_material_support": (c.c_int32, [c.c_void_p,
+                                             c.POINTER(c.c_double)]),
+        "sss_transmittance": (c.c_int32, [c.c_void_p, c.c_double,
+                                          c.c_double,
+                                          c.POINTER(c.c_double)]),
+        "sss_transmission_reach": (c.c_int32, [c.c_void_p,
+                                               c.POINTER(c.c_double)]),
+        "sss_transmission_slab": (c.c_int32, [c.c_void_p] +
+                                  [c.POINTER(c.c_double)] * 3),
+        "sss_method_name": (c.c_char_p, [c.c_int32]),
+        "sss_method_summary": (c.c_char_p, [c.c_int32]),
         "sss_process_options_default": (None,
                                         [c.POINTER(ProcessOptions)]),
         "sss_exr_read": (c.c_int32, [c.c_char_p, c.c_void_p,
@@ -163,14 +176,24 @@ def _check(code, detail):
         raise LibraryError(code, lib.sss_status_name(code).decode(), message)
 
 
-def burley_d(material):
-    """Burley's shape parameter d per channel for one material of a scene
-    description (a dict, docs/scene.md), as the library derives it from
-    the radius, the mapping and the albedo: the library owns the mappings
-    and their measured tables."""
-    import json
+def methods():
+    """[(name, summary)] of the library's methods, in sss_method order (the
+    value a method has in sss_options.method is its place here)."""
+    lib, out = library(), []
+    while lib.sss_method_name(len(out)):
+        i = len(out)
+        out.append((lib.sss_method_name(i).decode(),
+                    lib.sss_method_summary(i).decode()))
+    return out
+
+
+@contextlib.contextmanager
+def _material(material):
+    """The library's row (a pointer to sss_material) for one material of a
+    scene description (a dict, docs/scene.md), parsed and checked by the
+    library itself."""
     lib = library()
-    # (any valid pass index: d does not depend on it)
+    # (any valid pass index: nothing asked here depends on it)
     text = json.dumps({"version": 1, "materials": [
         dict(material, pass_index=1)]}).encode()
     ptr = ctypes.c_void_p()
@@ -179,15 +202,67 @@ def burley_d(material):
     _check(lib.sss_scene_parse(text, len(text), ctypes.byref(ptr), warn,
                                len(warn), err, len(err)), err)
     try:
-        d = (ctypes.c_double * 3)()
-        mats = lib.sss_scene_materials(ptr, None)
-        code = lib.sss_burley_d(mats, d)
-        if code != 0:
-            err.value = b""
-            _check(code, err)
-        return list(d)
+        yield lib.sss_scene_materials(ptr, None)
     finally:
         lib.sss_scene_free(ptr)
+
+
+def _doubles(call, material, count):
+    """Runs call(lib, row, *arrays) with `count` arrays of 3 doubles and
+    returns them as lists (one list when count is 1)."""
+    arrays = [(ctypes.c_double * 3)() for _ in range(count)]
+    with _material(material) as row:
+        _check(call(library(), row, *arrays), None)
+    lists = [list(a) for a in arrays]
+    return lists[0] if count == 1 else lists
+
+
+def burley_d(material):
+    """Burley's shape parameter d (metres) per channel, as the library
+    derives it from the radius, the mapping and the albedo."""
+    return _doubles(lambda lib, row, d: lib.sss_burley_d(row, d),
+                    material, 1)
+
+
+def material_support(material):
+    """Metres beyond which the material's profile is treated as 0, before
+    the scene's radius scale."""
+    metres = ctypes.c_double()
+    with _material(material) as row:
+        _check(library().sss_material_support(row, ctypes.byref(metres)),
+               None)
+    return metres.value
+
+
+def transmittance(material, thickness_metres, facing=1.0):
+    """What multiplies the back light at a thickness (metres), per
+    channel."""
+    return _doubles(lambda lib, row, out: lib.sss_transmittance(
+        row, thickness_metres, facing, out), material, 1)
+
+
+def transmission_reach(material):
+    """Metres of thickness beyond which the material lets (almost) nothing
+    through; 0 when it does not transmit."""
+    metres = ctypes.c_double()
+    with _material(material) as row:
+        _check(library().sss_transmission_reach(row, ctypes.byref(metres)),
+               None)
+    return metres.value
+
+
+def transmission_slab(material):
+    """(sigma_tr, a, zb), three lists of 3 (metres), of the diffusion slab
+    behind a Burley profile's transmission; None when the material's
+    transmission is not that slab."""
+    try:
+        return tuple(_doubles(lambda lib, row, s, a, zb:
+                              lib.sss_transmission_slab(row, s, a, zb),
+                              material, 3))
+    except LibraryError as e:
+        if e.name == "SSS_ERR_UNSUPPORTED":
+            return None
+        raise
 
 
 class Scene:

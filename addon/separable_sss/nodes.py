@@ -5,6 +5,7 @@ nodes are never deleted."""
 import bpy
 
 from . import blender_compat as compat
+from .errors import SSSError
 
 RESULT_NAME = "SSS Result"
 GROUP_NAME = "SSS Composite"       # both the group node and its node tree
@@ -107,17 +108,12 @@ def _show_layer(node, image):
     return socket if socket is not None else node.outputs[0]
 
 
-def _sss_error(message):
-    from . import pipeline      # here: pipeline imports this module
-    return pipeline.SSSError(message)
-
-
 def ensure_setup(scene, image):
     """Build or update the SSS result set-up in `scene`'s compositor and
     return its Image node. Calling it again reuses the same nodes."""
     tree = compat.compositor_tree(scene, create=True)
     if tree is None:
-        raise _sss_error("The scene has no compositor node tree")
+        raise SSSError("The scene has no compositor node tree")
 
     render_layers = _first(tree, "CompositorNodeRLayers")
     base_x, base_y = ((render_layers.location.x, render_layers.location.y)
@@ -137,7 +133,7 @@ def ensure_setup(scene, image):
             tree.nodes.remove(result)
         else:
             result.image = previous
-        raise _sss_error(str(ex)) from None
+        raise SSSError(str(ex)) from None
 
     if image.source == 'SEQUENCE':
         result.frame_start = scene.frame_start

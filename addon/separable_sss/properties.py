@@ -6,6 +6,8 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty,
                        StringProperty)
 
+from . import native
+
 PROFILES = [
     ("BLENDER", "From Material",
      "Burley from the material's own Subsurface Radius and Color", 0),
@@ -45,15 +47,25 @@ TEXTURING = [
      1),
 ]
 
-METHODS = [
-    ("SEPARABLE", "Separable", "Two 1-D passes: fast", 0),
-    ("SEPARABLE_EXACT", "Separable Exact", "Two 1-D passes per Gaussian "
-     "lobe: exact for Gaussian sums, Burley fitted; slower than Separable", 1),
-    ("DISK", "Disk", "Stochastic disk samples (64 per pixel): grainy on "
-     "fine detail", 2),
-    ("REFERENCE", "Reference", "Brute-force 2-D: slow, exact in screen "
-     "space", 3),
-]
+# The Method choices come from the library, which names its methods; the
+# list is kept here because Blender reads a dynamic enum's strings after
+# the call that made them has returned.
+_method_items = []
+
+
+def method_items(_self=None, _context=None):
+    """[(IDENTIFIER, Label, summary, value)] of the library's methods
+    ("separable-exact" is SEPARABLE_EXACT, "Separable Exact"); empty while
+    the library cannot be loaded (the operators say why)."""
+    if not _method_items:
+        try:
+            _method_items.extend(
+                (name.upper().replace("-", "_"),
+                 name.replace("-", " ").title(), summary, value)
+                for value, (name, summary) in enumerate(native.methods()))
+        except native.LibraryError:
+            return []
+    return _method_items
 
 
 TRANSMISSION = [
@@ -172,7 +184,8 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
         name="Radius Scale", min=0.0, soft_max=10.0, default=1.0,
         description="Multiplies every scattering distance (0: no "
         "scattering)")
-    method: EnumProperty(name="Method", items=METHODS, default="SEPARABLE")
+    # Stored as the method's value in the library (0 = separable).
+    method: EnumProperty(name="Method", items=method_items)
     taps: IntProperty(
         name="Quality (taps)", min=1, max=4097, default=33,
         description="Taps per 1-D pass; wider kernels are sampled with "

@@ -16,6 +16,7 @@ from contextlib import contextmanager
 import bpy
 
 from . import blender_compat as compat
+from . import transmission
 from .blender_compat import principled_input
 
 PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
@@ -169,7 +170,6 @@ def switched_off(scene, analysis, backlight=True):
     when a transmitting material is lit from behind: transmission.py); on
     leaving (normally or by an exception) every changed value, link, node,
     layer and material is restored or removed."""
-    from . import transmission
     undo = _Undo()
     try:
         _free_pass_indices(scene, analysis, undo)

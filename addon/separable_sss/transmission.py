@@ -23,12 +23,12 @@ honours per layer): its light is blurred afterwards, so few samples do.
 The add-on asks for it only when a scattering material transmits and a light
 can reach one of its objects from behind (or the world is bright), and
 removes it, its material and its AOVs afterwards."""
-import math
-
 import bpy
-from mathutils import Vector
 
 from . import blender_compat as compat
+from . import native
+from .description import library_material
+from .lighting import model, transmitting, wanted  # noqa: F401 (API)
 
 LAYER = "SSSBackLight"             # SSS_BACKLIGHT_LAYER in csrc/sss.h
 THICKNESS_AOV = "SSSThicknessSq"   # SSS_THICKNESS_SQ_PASS
@@ -36,13 +36,6 @@ FACING_AOV = "SSSFacing"           # SSS_FACING_PASS
 MATERIAL = "SSS Back Light Override"
 TAG = "SSS back light"
 
-# A light counts as "behind" when the angle between the directions from the
-# object to it and to the camera exceeds this (75 degrees: side lights
-# that graze thin edges count, front lights do not).
-BEHIND_COS = math.cos(math.radians(75.0))
-# The world lights thin parts from behind when its colour x strength is at
-# least this (luminance), or when its colour is textured.
-WORLD_THRESHOLD = 0.1
 # Render cost of the layer, measured on the head scene (make compare's
 # first scene, 160x120, CPU): see README, Back-lit transmission.
 COST_NOTE = ("measured on the head scene: the layer at a quarter of the "
@@ -61,223 +54,11 @@ LAYER_MAX_DEPTH = 1
 # averaged t^2).
 AO_SAMPLES = 4
 
-MODELS = {"OFF": "off", "BURLEY": "burley", "JIMENEZ": "jimenez",
-          "BEER_LAMBERT": "beer-lambert", "FAST": "fast"}
-
-
-def model(found):
-    """The material's transmission model with Auto resolved: Profile for
-    Random Walk materials (Burley profile, as the add-on maps them), off
-    for the others."""
-    s = found.material.sss
-    if s.profile == "NONE":
-        return "OFF"
-    if s.transmission != "AUTO":
-        return s.transmission
-    walk = found.method.startswith("RANDOM_WALK") and \
-        s.profile in ("BLENDER", "BURLEY")
-    return "BURLEY" if walk else "OFF"
-
-
-def transmitting(analysis):
-    """The found materials whose transmission is on."""
-    return [f for f in analysis.found if model(f) != "OFF"]
-
-
-def _objects_with(scene, material):
-    for obj in scene.objects:
-        if obj.hide_render or not hasattr(obj, "material_slots"):
-            continue
-        if any(slot.material == material for slot in obj.material_slots):
-            yield obj
-
-
-def _centre(obj):
-    corners = [obj.matrix_world @ Vector(c) for c in obj.bound_box]
-    return sum(corners, Vector()) / len(corners)
-
-
-def _world_is_bright(scene):
-    world = scene.world
-    if world is None:
-        return False
-    if not compat.uses_nodes(world):
-        c = world.color
-        return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] >= \
-            WORLD_THRESHOLD
-    for node in world.node_tree.nodes:
-        if node.type != "BACKGROUND":
-            continue
-        col, strength = node.inputs["Color"], node.inputs["Strength"]
-        if col.is_linked or strength.is_linked:
-            return True
-        c = col.default_value
-        lum = (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]) * \
-            strength.default_value
-        if lum >= WORLD_THRESHOLD:
-            return True
-    return False
-
-
-def lights_behind(scene, analysis):
-    """Names of what lights a transmitting material's objects from behind
-    (lights, "World"); empty when nothing does."""
-    if scene.camera is None:
-        return []
-    cam = scene.camera.matrix_world.translation
-    names = []
-    lights = [o for o in scene.objects if o.type == "LIGHT" and
-              not o.hide_render and o.data.energy > 0.0]
-    for found in transmitting(analysis):
-        for obj in _objects_with(scene, found.material):
-            centre = _centre(obj)
-            to_cam = (cam - centre).normalized()
-            for light in lights:
-                if light.data.type == "SUN":
-                    to_light = (light.matrix_world.to_3x3() @
-                                Vector((0.0, 0.0, 1.0))).normalized()
-                else:
-                    to_light = (light.matrix_world.translation -
-                                centre).normalized()
-                if to_light.dot(to_cam) < BEHIND_COS and \
-                        light.name not in names:
-                    names.append(light.name)
-    if transmitting(analysis) and _world_is_bright(scene):
-        names.append("World")
-    return names
-
-
-def wanted(scene, analysis):
-    """(bool, why): whether the render needs the back-light layer."""
-    mode = scene.sss.transmission_layer
-    mats = transmitting(analysis)
-    if not mats:
-        return False, "no scattering material has transmission on"
-    if mode == "NEVER":
-        return False, "the back-light layer is turned off"
-    if mode == "ALWAYS":
-        return True, "always on"
-    behind = lights_behind(scene, analysis)
-    if not behind:
-        return False, "no light reaches a transmitting material from behind"
-    return True, "lit from behind by " + ", ".join(behind)
-
-
-def _rw_alpha(a):
-    """Cycles' single-scattering albedo for surface albedo a (g = 0);
-    mirror of csrc/sss_transmission.c rw_alpha."""
-    a = min(max(a, 0.0), 1.0)
-    if a <= 0.0:
-        return 0.0
-    b = a ** 0.25
-    al = (1 - b) * 1.8260523782 * math.atan(5.112467903288 * a) ** \
-        1.09686102424 + b * 0.496310210422 * \
-        math.atan(4.2350090365 * a) ** 2.40602999408
-    return min(max(al, 0.0), 0.999999)
-
-
-def slab_transmittance(mfp, albedo, t):
-    """The library's burley-model T(t) for a Burley profile: the 1-D
-    diffusion slab of csrc/sss_transmission.c (slab_make, slab_eval)."""
-    alpha = _rw_alpha(albedo)
-    zb = 2.0 * (2.0 - alpha) * mfp / 3.0
-    a = 2.0 * mfp / 3.0 + zb
-    s = math.sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha)) / mfp
-    big_l = max(t + 2.0 * zb, 2.0 * a)
-    x = s * big_l
-    if x < 1e-6:
-        return a / big_l
-    y = s * a
-    return min(1.0, -math.expm1(-2.0 * y) * math.exp(-(x - 2.0 * y)) /
-               -math.expm1(-2.0 * x))
-
-
-def slab_reach(mfp, albedo, level=0.01):
-    """Thickness (same unit as mfp) where slab_transmittance falls below
-    level; at most 100 mean free paths (a non-absorbing medium falls only
-    as a / L)."""
-    hi = 100.0 * mfp
-    if slab_transmittance(mfp, albedo, hi) >= level:
-        return hi
-    lo = 0.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if slab_transmittance(mfp, albedo, mid) >= level:
-            lo = mid
-        else:
-            hi = mid
-    return hi
-
-
-def rw_mfp_over_radius(a):
-    """Cycles' mean free path over the radius, sqrt(3 (1 - a')) with a'
-    inverting Jensen's dipole at IOR 1.4 (bssrdf_setup_radius); mirror of
-    csrc/sss_transmission.c rw_mfp_over_radius."""
-    if not a >= 1e-4:
-        return math.sqrt(3.0)
-    if a >= 0.995:
-        return math.sqrt(3.0 * (1.0 - 0.999999))
-    eta = 1.4
-    f_dr = -1.440 / eta ** 2 + 0.710 / eta + 0.668 + 0.0636 * eta
-    k = 4.0 / 3.0 * (1.0 + f_dr) / (1.0 - f_dr)
-    lo, hi = 0.0, 1.0
-    for _ in range(48):
-        mid = 0.5 * (lo + hi)
-        t = math.sqrt(3.0 * (1.0 - mid))
-        if 0.5 * mid * (1.0 + math.exp(-k * t)) * math.exp(-t) < a:
-            lo = mid
-        else:
-            hi = mid
-    return math.sqrt(3.0 * (1.0 - 0.5 * (lo + hi)))
-
-
-def _mfps(entry):
-    """The medium's mean free path (metres) per channel for a material
-    entry, as the library derives it: Cycles' own for cycles-random-walk,
-    l = d s(A) with the library's d for the other mappings."""
-    if entry["mapping"] == "cycles-random-walk":
-        return [r * rw_mfp_over_radius(a)
-                for r, a in zip(entry["radius"], entry["albedo"])]
-    from . import native
-    return [d * (1.9 - a + 3.5 * (a - 0.8) ** 2)
-            for d, a in zip(native.burley_d(entry), entry["albedo"])]
-
-
-def _burley_reach(scene, found):
-    """Metres (before the scene's radius scale): slab_reach over the
-    channels, with the medium the library derives from the material."""
-    from .pipeline import _material_entry
-    entry = _material_entry(found)
-    reach = 0.0
-    for mfp, a in zip(_mfps(entry), entry["albedo"]):
-        if mfp > 0.0:
-            reach = max(reach, slab_reach(mfp, a))
-    return reach
-
-
 def _len_metres(found, scene):
     """How thick a part can be before its transmittance is negligible
     (< 1 %), in metres: the AO distance must reach that far."""
-    from .pipeline import support_metres
-    s = found.material.sss
-    scale = scene.sss.radius_scale * s.radius_scale
-    kind = model(found)
-    if kind == "BURLEY":
-        if s.profile in ("BLENDER", "BURLEY"):
-            return _burley_reach(scene, found) * scene.sss.radius_scale
-        return support_metres(scene, found)     # Gaussians: 1e-5 left
-    if kind == "JIMENEZ":
-        # sum w e^{-s^2/v} < 1 % at s = 5 mm of d'Eon's profile.
-        k = 8.25 * (1.0 - s.transmission_translucency)
-        if k <= 0.0:
-            return support_metres(scene, found)
-        width = s.jimenez_width if s.profile == "JIMENEZ" else 0.012
-        return 5.0 * width * scale / k
-    if kind == "BEER_LAMBERT":
-        c = max(min(max(s.transmission_color), 0.999), 1e-3)
-        return s.transmission_distance * scale * math.log(0.01) / \
-            math.log(c)
-    return s.transmission_distance * scale      # fast: gone at distance
+    return native.transmission_reach(library_material(scene, found)) * \
+        scene.sss.radius_scale
 
 
 def ao_distance(scene, analysis):
@@ -427,28 +208,21 @@ def _override_material(distance, undo, need_ao=True):
 
 def _slab_params(scene, found):
     """(sigma_tr, a, zb) per channel in scene units for a material whose
-    transmission is the slab (the burley model on a Burley profile), after
-    its thickness scale; None otherwise (or when it lets nothing through
-    or everything: thickness scale 0)."""
+    transmission is the library's diffusion slab (the burley model on a
+    Burley profile), after its thickness scale; None otherwise (or when it
+    lets nothing through or everything: thickness scale 0)."""
     s = found.material.sss
-    if model(found) != "BURLEY" or s.profile not in ("BLENDER", "BURLEY"):
-        return None
     k = s.thickness_scale
-    if not k > 0.0:
+    if model(found) != "BURLEY" or not k > 0.0:
         return None
-    from .pipeline import _material_entry
-    entry = _material_entry(found)
     unit = scene.unit_settings.scale_length or 1.0
     length = scene.sss.radius_scale / unit
+    slab = native.transmission_slab(library_material(scene, found))
+    if slab is None or not all(a * length > 0.0 for a in slab[1]):
+        return None             # not the slab, or a channel has no medium
     out = ([], [], [])
-    for mfp, alb in zip(_mfps(entry), entry["albedo"]):
-        mfp *= length
-        if not mfp > 0.0:
-            return None
-        alpha = _rw_alpha(alb)
-        zb = 2.0 * (2.0 - alpha) * mfp / 3.0
-        a = 2.0 * mfp / 3.0 + zb
-        sigma = math.sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha)) / mfp
+    for sigma, a, zb in zip(*slab):
+        sigma, a, zb = sigma / length, a * length, zb * length
         sigma = max(sigma, 1e-3 / a)    # keeps the shader's 0/0 away
         # T(k t) with (sigma, a, zb) is T(t) with (sigma k, a / k, zb / k)
         out[0].append(sigma * k)
@@ -539,24 +313,3 @@ def add_layer(scene, analysis, undo, source_layer=None):
         aov.type = "VALUE"
     # Other view layers are left as they are: one render gives both.
     return layer
-
-
-def material_fields(found):
-    """The scene-description keys of a material's transmission."""
-    s = found.material.sss
-    kind = model(found)
-    if kind == "OFF":
-        return {"transmission": "off"}
-    return {
-        "transmission": MODELS[kind],
-        "transmission_strength": s.transmission_strength,
-        "transmission_color": [min(max(float(c), 0.0), 1.0)
-                               for c in s.transmission_color],
-        "transmission_distance": s.transmission_distance * s.radius_scale,
-        "transmission_translucency": s.transmission_translucency,
-        "transmission_distortion": s.transmission_distortion,
-        "transmission_power": s.transmission_power,
-        "transmission_scale": s.transmission_scale,
-        "transmission_ambient": s.transmission_ambient,
-        "thickness_scale": s.thickness_scale,
-    }

@@ -5,7 +5,7 @@ import textwrap
 
 import bpy
 
-from . import nodes, pipeline
+from . import nodes, pipeline, transmission
 from .presets import SSS_MT_material_presets
 
 
@@ -130,7 +130,6 @@ def _draw_transmission(layout, context, s, split):
 def _draw_backlight(layout, context, scene):
     """The scene's back-light layer: the setting, whether this render gets
     it and why, and what it costs."""
-    from . import transmission
     s = scene.sss
     col = layout.column()
     _prop(col, s, "transmission_layer", False)
