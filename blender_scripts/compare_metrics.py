@@ -246,3 +246,14 @@ def time_at(samples, seconds, n):
     if n > s[-1]:
         return float(t[-1] * n / s[-1])
     return float(np.interp(n, s, t))
+
+
+def crop_box(mask, pad=0.12):
+    """The box (y0, y1, x0, x1) around the mask's pixels, widened by pad
+    of its size on each side (and 2 pixels): what the pictures show."""
+    ys, xs = np.nonzero(mask)
+    h, w = mask.shape
+    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+    py, px = int((y1 - y0) * pad) + 2, int((x1 - x0) * pad) + 2
+    return (max(0, y0 - py), min(h, y1 + py), max(0, x0 - px),
+            min(w, x1 + px))

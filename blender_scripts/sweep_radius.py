@@ -37,7 +37,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-import compare  # noqa: E402  (also puts the add-on on sys.path)
+import compare_runs as compare  # noqa: E402  (puts the add-on on sys.path)
 from separable_sss import blender_compat as compat  # noqa: E402
 import compare_metrics as cm  # noqa: E402
 from exr_io import read_exr  # noqa: E402

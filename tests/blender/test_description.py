@@ -1,0 +1,89 @@
+"""The add-on asks the library instead of mirroring it: the Method choices
+are the library's methods, the scene description it writes is one the
+library reads without a warning, and the sizes it shows and sets up come
+from the library's own answers."""
+import json
+
+import bpy
+import pytest
+
+from helpers import build_blend, load_addon
+
+separable_sss = load_addon()
+from separable_sss import (analysis, description, native,  # noqa: E402
+                           pipeline, properties, transmission)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    separable_sss.register()
+    yield
+    separable_sss.unregister()
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    path = build_blend("two", str(tmp_path_factory.mktemp("b") / "two.blend"))
+    bpy.ops.wm.open_mainfile(filepath=path)
+    return bpy.context.scene
+
+
+def write(scene, found, path):
+    """As the pipeline does: with the pass indices the render gets."""
+    with pipeline.switched_off(scene, found, backlight=False):
+        description.write_description(scene, found, path)
+
+
+def test_method_choices_are_the_librarys():
+    names = [name for name, _ in native.methods()]
+    assert len(names) >= 4 and "separable" == names[0]
+    items = properties.method_items()
+    assert [i[0] for i in items] == [n.upper().replace("-", "_")
+                                     for n in names]
+    assert [i[3] for i in items] == list(range(len(names)))
+    assert all(i[2] for i in items)     # the library's summary as tooltip
+    for identifier, *_ in items:
+        assert description.method_name(identifier) in names
+
+
+def test_every_method_choice_reaches_the_library(scene, tmp_path):
+    found = analysis.analyse(scene)
+    for value, (name, _) in enumerate(native.methods()):
+        scene.sss.method = name.upper().replace("-", "_")
+        path = str(tmp_path / f"{name}.json")
+        write(scene, found, path)
+        assert json.load(open(path))["method"] == name
+        with native.Scene(path) as sc:
+            assert sc.warnings == []
+    scene.sss.method = "SEPARABLE"
+
+
+def test_description_is_read_without_warnings(scene, tmp_path):
+    found = analysis.analyse(scene)
+    assert len(found.found) == 2
+    scene.sss.radius_scale = 1.5
+    path = str(tmp_path / "scene.json")
+    write(scene, found, path)
+    data = json.load(open(path))
+    assert data["radius_scale"] == pytest.approx(1.5)
+    with native.Scene(path) as sc:
+        assert sc.warnings == []
+    scene.sss.radius_scale = 1.0
+
+
+def test_sizes_come_from_the_library(scene):
+    found = analysis.analyse(scene).found[0]
+    entry = description.library_material(scene, found)
+    scene.sss.radius_scale = 2.0
+    assert pipeline.support_metres(scene, found) == pytest.approx(
+        2.0 * native.material_support(entry))
+    scene.sss.radius_scale = 1.0
+    # The back-light layer's thickness reach is the library's answer.
+    found.material.sss.transmission = "BEER_LAMBERT"
+    found.material.sss.transmission_color = (0.6, 0.3, 0.2)
+    entry = description.library_material(scene, found)
+    reach = native.transmission_reach(entry)
+    assert reach > 0.0
+    assert max(native.transmittance(entry, reach)) <= 0.0101
+    assert transmission._len_metres(found, scene) == pytest.approx(reach)
+    found.material.sss.transmission = "AUTO"
