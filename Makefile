@@ -1,19 +1,36 @@
 # libsss - screen-space subsurface scattering for Blender render passes.
 #
-#   make          build build/libsss.so
-#   make test     install missing packages (as root), build, run every test:
-#                 C tests, the sss command on real Blender renders (pytest),
-#                 then the C tests again under ASan + UBSan
-#   make check    the C tests again under ASan + UBSan with -Werror
-#   make demo     render a small synthetic scene with SSS and write a PNG
+#   make          the library build/libsss.so and the command build/sss
+#   make test     everything CI runs: installs missing packages (as root) and
+#                 Blender 4.5/5.0 (bpy, in build/), builds, then the C tests,
+#                 the sss command on real Blender renders (pytest), the
+#                 add-on's tests inside every supported Blender, the C tests
+#                 under valgrind, and make check
+#   make check    the C tests and the command's tests again under ASan +
+#                 UBSan, warnings as errors
+#   make valgrind the quick C tests under valgrind memcheck
+#   make fuzz     coverage-guided fuzzing of the EXR and scene readers
+#                 (clang's libFuzzer, FUZZ_SECONDS per target)
+#   make deps     install the missing Debian packages (as root)
+#   make bpy      install Blender 4.5 and 5.0 as Python modules into build/
+#   make addon    the add-on: build/separable_sss.zip (3.4) and the
+#                 extension build/separable_sss-VERSION-PLATFORM.zip (4.2+)
+#   make blender-test  the add-on's tests in every supported Blender
+#   make demo     render the bundled head-sized skin scene headlessly with
+#                 the add-on: out/demo.exr and out/demo.png (before | after)
+#   make demo-c   the library on synthetic passes, no Blender
+#   make report   separable against the brute-force reference at 512x512
+#   make bench    speed: cost per scattering pixel and the ratios that
+#                 matter, into out/bench
 #   make compare  libsss against Cycles random walk and EEVEE on the three
 #                 bundled scenes: out/compare/SCENE/{sheet,plot}.png, results.*
 #   make sweep    how the error reduction depends on the scattering radius
 #                 (marble, mixed): out/compare/sweep/SCENE/sweep.{png,md,csv}
-#   make clean
+#   make figures  the README's picture docs/images/head.png (compare on head)
+#   make clean    remove build/
 #
 # Results must not depend on the compiler contracting a*b+c into an FMA:
-# -ffp-contract=off, and never -ffast-math (see README, Determinism).
+# -ffp-contract=off, and never -ffast-math (see docs/library.md, Determinism).
 
 CC      ?= cc
 CFLAGS  ?= -O2 -g
@@ -34,7 +51,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep clean
+.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -240,6 +257,17 @@ sweep: deps all
 			|| { tail -n 40 $$log; exit 1; }; \
 		grep -E '^sweep' $$log; \
 	done
+
+# The README's picture: the head scene without SSS, with the library and
+# with Cycles' random walk (the reference), each with its time, from a
+# compare run on head that keeps its images (scripts/readme_figure.py):
+# docs/images/head.png. FIGURE_ARGS are compare.py's options for that run.
+FIGURE_ARGS ?= --samples 64 --rw-samples 64,512 --no-eevee --no-denoise
+figures:
+	@SSS_COMPARE_KEEP_WORK=1 $(MAKE) --no-print-directory compare \
+		COMPARE_SCENES=head COMPARE_ARGS="$(FIGURE_ARGS)"
+	@$(PYTHON) scripts/readme_figure.py --compare out/compare/head \
+		--out docs/images/head.png
 
 clean:
 	rm -rf $(BUILD)

@@ -110,7 +110,7 @@ struct sss__transmission {
  * = 1 / (1 + e^{-2 sigma_tr a}) is about 1/2: about half of what enters a
  * thin part leaves by the face it entered. Against Cycles 3.4's random
  * walk on a skin slab lit only from behind (measure_transmission.py
- * --slab-sweep; README, Back-lit transmission) this T is within about 10 %
+ * --slab-sweep; docs/transmission.md) this T is within about 10 %
  * for every channel from 0.5 to 4 cm and two radii; the profile's mass
  * beyond t (this model before) was 3-6 times too low. */
 

@@ -37,7 +37,7 @@ MATERIAL = "SSS Back Light Override"
 TAG = "SSS back light"
 
 # Render cost of the layer, measured on the head scene (make compare's
-# first scene, 160x120, CPU): see README, Back-lit transmission.
+# first scene, 160x120, CPU): see docs/transmission.md.
 COST_NOTE = ("measured on the head scene: the layer at a quarter of the "
              "samples adds 1 to 2 times the render time (every surface is "
              "a white translucent there, so its paths bounce long)")
@@ -47,7 +47,7 @@ COST_NOTE = ("measured on the head scene: the layer at a quarter of the "
 # object (which gathers the light behind it) is depth 1. Deeper paths
 # (light that left and re-entered, bounced off the surroundings) cost time
 # and, on the head scene, made the back-lit error larger (0.136 vs 0.129
-# RMSE at depth 1; README, Back-lit transmission).
+# RMSE at depth 1; docs/transmission.md).
 LAYER_MAX_DEPTH = 1
 # Ambient-occlusion rays per shading point for the thickness AOV (16 made
 # the layer cost twice as much as 4 on the head scene, for the same
