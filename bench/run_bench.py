@@ -48,6 +48,10 @@ class Bench:
     def __init__(self, build):
         self.exe = os.path.join(build, "sss-bench")
         self.rows = []
+        # The library's methods, as it names them.
+        self.methods = subprocess.run([self.exe, "--methods"], check=True,
+                                      capture_output=True,
+                                      text=True).stdout.split()
 
     def run(self, tag, size=(1920, 1080), coverage=1.0, radius=16,
             method="separable", threads=0, scalar=False, repeat=2, rows=0,
@@ -81,8 +85,11 @@ def grid(b):
                 log(f"separable {size[0]}x{size[1]} coverage {cov:.0%} "
                     f"radius {r:2d} px: {row['ns_per_scattering_px']:8.1f} ns "
                     f"per scattering pixel, peak {row['rss_peak_mib']:.0f} MiB")
-    # The other methods on the small size: they are slower by design.
-    for method in ("separable-exact", "disk"):
+    # The other methods on the small size: they are slower by design (the
+    # reference gets a band of the frame below).
+    for method in b.methods:
+        if method in ("separable", "reference"):
+            continue
         for cov in (0.1, 1.0):
             for r in RADII:
                 row = b.run("grid", SIZES[0], cov, r, method=method, repeat=1)
@@ -263,8 +270,8 @@ def plot(rows, path):
     fig, ax = plt.subplots(1, 2, figsize=(13, 5))
     grid_rows = [r for r in rows if r["tag"] == "grid"]
     styles = {0.1: ":", 0.5: "--", 1.0: "-"}
-    colours = {"separable": "C0", "separable-exact": "C1", "disk": "C2",
-               "reference": "C3"}
+    methods = list(dict.fromkeys(r["method"] for r in grid_rows))
+    colours = {m: f"C{i}" for i, m in enumerate(methods)}
     for method in colours:
         for cov in COVERAGES:
             pts = sorted((r["radius_px"], r["ns_per_scattering_px"])

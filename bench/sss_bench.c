@@ -145,6 +145,7 @@ static void usage(void)
 	fputs("usage: sss-bench [--size W H] [--coverage C] [--radius PX]\n"
 	      "                 [--method NAME] [--threads N] [--scalar]\n"
 	      "                 [--repeat N] [--rows N] [--dump PREFIX] [--header]\n"
+	      "       sss-bench --methods   (the library's methods, one a line)\n"
 	      "Prints one CSV line: method,width,height,rows,coverage,radius_px,\n"
 	      "threads,simd,seconds,mpx_per_s,ns_per_scattering_px,rss_inputs_mib,\n"
 	      "rss_peak_mib. --rows N times only the first N rows (the slow\n"
@@ -182,7 +183,11 @@ int main(int argc, char **argv)
 			dump_prefix = argv[++i];
 		else if (!strcmp(argv[i], "--header"))
 			header = 1;
-		else
+		else if (!strcmp(argv[i], "--methods")) {
+			for (int32_t m = 0; sss_method_name(m); m++)
+				puts(sss_method_name(m));
+			return 0;
+		} else
 			usage();
 	}
 	if (w < 1 || h < 1 || repeat < 1 || !(coverage > 0 && coverage <= 1))
