@@ -52,6 +52,7 @@ sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
+from separable_sss import native  # noqa: E402
 from exr_io import read_exr  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
@@ -305,7 +306,6 @@ def scene_json(path, albedo, radius, mapping, texturing="post",
 
 
 def scatter(inp, desc, out):
-    from separable_sss import native
     with native.Scene(desc) as sc:
         sc.process(inp, out)
     ch = read_exr(out)
@@ -335,7 +335,7 @@ def profile_along(img, n):
 
 def part_edge(args):
     rows, prof_rows = [], []
-    from separable_sss import native  # noqa: F401  (fail early)
+    native.library()  # fail early, before the renders
     for radius in args.radii:
         for albedo in albedo_sets(args):
             scene = reset()
@@ -399,10 +399,13 @@ def part_edge(args):
                 row["d_fit_over_r"] = float(best[0])
                 row["rmse_fit"] = best[1]
                 a = albedo[c]
-                row["d_over_r_cycles"] = 0.25 / math.pi
-                row["d_over_r_eevee"] = 0.0459101
-                row["d_over_r_random_walk"] = 1.0 / (
-                    3.5 + 100 * (a - 0.33) ** 4)
+                # The older mappings' d / r, as the library has them.
+                for key in ("cycles", "eevee", "random-walk"):
+                    row["d_over_r_" + key.replace("-", "_")] = \
+                        native.burley_d({"profile": "burley",
+                                         "radius": [1.0] * 3,
+                                         "mapping": key,
+                                         "albedo": [a] * 3})[0]
                 rows.append(row)
                 log("edge", {k: (round(v, 4) if isinstance(v, float) else v)
                              for k, v in row.items()})
