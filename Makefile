@@ -27,6 +27,7 @@
 #   make sweep    how the error reduction depends on the scattering radius
 #                 (marble, mixed): out/compare/sweep/SCENE/sweep.{png,md,csv}
 #   make figures  the README's picture docs/images/head.png (compare on head)
+#   make screenshots  the add-on's panels, docs/images/ui-*.png (Xvfb, 3.4)
 #   make clean    remove build/
 #
 # Results must not depend on the compiler contracting a*b+c into an FMA:
@@ -51,7 +52,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures clean
+.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures screenshots clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -268,6 +269,23 @@ figures:
 		COMPARE_SCENES=head COMPARE_ARGS="$(FIGURE_ARGS)"
 	@$(PYTHON) scripts/readme_figure.py --compare out/compare/head \
 		--out docs/images/head.png
+
+# The add-on's panels in a real Blender window (Debian's 3.4 under Xvfb:
+# the bpy builds have no windows), on the bundled head scene:
+# docs/images/ui-*.png (scripts/ui_screenshots.py), each looked at before
+# it is committed.
+SHOT_RUN = xvfb-run -a -s "-screen 0 1920x1080x24" $(BLENDER) \
+	--factory-startup --enable-event-simulate --python \
+	scripts/ui_screenshots.py -- $(BUILD)/screenshots/head.blend docs/images
+screenshots: deps all
+	@mkdir -p $(BUILD)/screenshots
+	@$(BLENDER) -b --factory-startup --python-exit-code 1 \
+		--python blender_scripts/build_scene.py -- --kind head \
+		--out $(BUILD)/screenshots/head.blend --size 320 --samples 16 \
+		| grep build_scene
+	@SSS_LIB=$(abspath $(BUILD))/libsss.so $(SHOT_RUN) | grep ui_screenshots
+	@SSS_LIB=$(abspath $(BUILD))/libsss.so $(SHOT_RUN) --open \
+		| grep ui_screenshots
 
 clean:
 	rm -rf $(BUILD)

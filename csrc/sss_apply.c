@@ -13,14 +13,13 @@
 static const struct {
 	const char *name, *summary;
 } methods[] = {
-	[SSS_METHOD_SEPARABLE] = {"separable", "Two 1-D passes: fast"},
-	[SSS_METHOD_SEPARABLE_EXACT] = {"separable-exact", "Two 1-D passes "
-		"per Gaussian lobe: exact for Gaussian sums, Burley fitted; "
-		"slower than separable"},
-	[SSS_METHOD_DISK] = {"disk", "Stochastic disk samples (64 per pixel "
-		"by default): grainy on fine detail"},
-	[SSS_METHOD_REFERENCE] = {"reference", "Brute-force 2-D: slow, exact "
-		"in screen space"},
+	[SSS_METHOD_SEPARABLE] = {"separable", "Fastest: two 1-D passes"},
+	[SSS_METHOD_SEPARABLE_EXACT] = {"separable-exact", "Slower, exact for "
+		"Gaussian sums: two 1-D passes per lobe"},
+	[SSS_METHOD_DISK] = {"disk", "Sampled disk: grainy on fine detail at "
+		"few samples"},
+	[SSS_METHOD_REFERENCE] = {"reference", "Slowest, exact in screen "
+		"space: brute-force 2-D"},
 };
 
 const char *sss_method_name(int32_t method)

@@ -118,7 +118,11 @@ def ensure_setup(scene, image):
     render_layers = _first(tree, "CompositorNodeRLayers")
     base_x, base_y = ((render_layers.location.x, render_layers.location.y)
                       if render_layers is not None else (0.0, 0.0))
-    y = base_y - 450.0
+    # Below the Render Layers node, whose height grows with its passes
+    # (node.dimensions is only known once drawn).
+    sockets = len([o for o in render_layers.outputs if o.enabled]) \
+        if render_layers is not None else 0
+    y = base_y - max(450.0, 60.0 + 22.0 * sockets)
 
     result = _find(tree, "result", RESULT_NAME, "CompositorNodeImage")
     created = result is None
@@ -158,6 +162,9 @@ def ensure_setup(scene, image):
     _link(tree, source, group.inputs[0])
     _link(tree, group.outputs[0], composite)
     _link(tree, group.outputs[0], viewer.inputs["Image"])
+    # A run leaves the artist's selection as it was, not ours selected.
+    for node in (result, group, viewer):
+        node.select = False
     return result
 
 

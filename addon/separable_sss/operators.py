@@ -9,6 +9,7 @@ import threading
 import time
 
 import bpy
+from bpy.app.handlers import persistent
 from bpy.props import BoolProperty
 
 from . import nodes, pipeline, render_flow
@@ -66,6 +67,31 @@ def _poll_common(cls, context):
     return True
 
 
+# The passes a render needs for Apply SSS to Last Render (Render with SSS
+# turns them on for its own render).
+APPLY_PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color", "z",
+                "material_index")
+
+
+def _missing_passes(layer):
+    """The names of APPLY_PASSES the view layer does not render."""
+    if layer is None:
+        return []
+    return [layer.bl_rna.properties["use_pass_" + p].name
+            for p in APPLY_PASSES if not getattr(layer, "use_pass_" + p)]
+
+
+# Per scene name, what its last render lacked (the Render Result keeps no
+# list of its passes that Python can read): recorded as each render ends.
+_last_render_missing = {}
+
+
+@persistent
+def _record_render(scene, *_args):
+    _last_render_missing[scene.name] = {
+        layer.name: _missing_passes(layer) for layer in scene.view_layers}
+
+
 class _Run:
     """State shared with the worker thread: no bpy in here."""
 
@@ -84,7 +110,8 @@ class _Run:
 class _SSSRunBase:
     """Shared by Render with SSS and Apply SSS to Last Render: subclasses
     define prepare(context) -> pipeline.Job (main thread)."""
-    bl_options = {'REGISTER'}
+    # An undo step: the run changes the compositor and the scene's result.
+    bl_options = {'REGISTER', 'UNDO'}
     prepare = None  # subclasses: prepare(context) -> pipeline.Job
 
     def _nothing_to_do(self, context):
@@ -230,7 +257,19 @@ class SSS_OT_apply(_SSSRunBase, bpy.types.Operator):
         if not _poll_common(cls, context):
             return False
         if bpy.data.images.get("Render Result") is None:
-            cls.poll_message_set("There is no render yet: render first")
+            cls.poll_message_set("There is no render yet: render first, "
+                                 "or use Render with SSS")
+            return False
+        # Unknown (a render before the add-on was on): tried, and the
+        # library names what is missing.
+        layer = context.view_layer
+        missing = _last_render_missing.get(context.scene.name, {}).get(
+            layer.name if layer is not None else "")
+        if missing:
+            cls.poll_message_set("The render lacks %s: use Render with "
+                                 "SSS, or enable them in View Layer "
+                                 "Properties and render again"
+                                 % ", ".join(missing))
             return False
         return True
 
@@ -354,6 +393,7 @@ _keymap_items = []
 
 def register():
     _register_classes()
+    bpy.app.handlers.render_post.append(_record_render)
     # F12 and Ctrl F12 through the operator above, where Blender has a
     # window (no key configuration exists under blender -b).
     kc = bpy.context.window_manager.keyconfigs.addon
@@ -368,6 +408,8 @@ def register():
 
 
 def unregister():
+    if _record_render in bpy.app.handlers.render_post:
+        bpy.app.handlers.render_post.remove(_record_render)
     for km, item in _keymap_items:
         km.keymap_items.remove(item)
     _keymap_items.clear()

@@ -32,11 +32,16 @@ class Job:
     summary: str = ""
 
 
-def output_dir(scene):
+def output_path(scene):
     """The folder for passes and results: the scene's setting, else a
-    per-user temporary folder."""
-    path = bpy.path.abspath(scene.sss.output_dir) if scene.sss.output_dir \
+    per-user temporary folder (nothing is created)."""
+    return bpy.path.abspath(scene.sss.output_dir) if scene.sss.output_dir \
         else os.path.join(tempfile.gettempdir(), "separable_sss")
+
+
+def output_dir(scene):
+    """output_path(), created and checked writable."""
+    path = output_path(scene)
     try:
         os.makedirs(path, exist_ok=True)
         probe = tempfile.NamedTemporaryFile(dir=path, prefix=".sss-probe-")

@@ -105,9 +105,10 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
         description="How a Burley radius becomes the profile's shape")
     radius_scale: FloatProperty(
         name="Radius Scale", min=0.0, soft_max=10.0, default=1.0,
-        description="Multiplies this material's scattering distances")
+        description="Multiplies this material's scattering distances (the "
+        "scene's Scene Radius Scale multiplies every material's)")
     match_energy: BoolProperty(
-        name="Match Random-Walk Energy", default=True,
+        name="Match Energy", default=True,
         description="Scale the scattered light per colour channel by the "
         "random walk's measured reflectance over the diffuse lobe's "
         "(Random Walk materials and the Burley profile)")
@@ -144,8 +145,10 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
     far_sigma: FloatVectorProperty(name="Far Sigma (mm)", size=3,
                                    min=0.001, soft_max=20.0,
                                    default=(1.0, 0.12, 0.10))
-    taps: IntProperty(name="Taps", min=0, max=4097, default=0,
-                      description="Taps per 1-D pass, 0 = the scene's")
+    taps: IntProperty(
+        name="Taps", min=0, max=4097, default=0,
+        description="Samples per 1-D pass for this material; 0: the "
+        "scene's Taps")
     transmission: EnumProperty(
         name="Transmission", items=TRANSMISSION, default="AUTO",
         description="Light through thin parts lit from behind (ears, "
@@ -154,7 +157,7 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
         name="Strength", min=0.0, max=1.0, default=1.0,
         description="Share of the back light that crosses")
     transmission_color: FloatVectorProperty(
-        name="Color", size=3, min=0.0, max=1.0, subtype="COLOR",
+        name="Tint", size=3, min=0.0, max=1.0, subtype="COLOR",
         default=(1.0, 1.0, 1.0),
         description="Tint; Beer-Lambert: the colour seen through Distance")
     transmission_distance: FloatProperty(
@@ -175,21 +178,21 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
     transmission_ambient: FloatProperty(name="Ambient", min=0.0,
                                         soft_max=1.0, default=0.0)
     thickness_scale: FloatProperty(
-        name="Thickness Scale", min=0.0, soft_max=10.0, default=1.0,
+        name="Thickness", min=0.0, soft_max=10.0, default=1.0,
         description="Multiplies the measured thickness (below 1: thinner)")
 
 
 class SSSSceneSettings(bpy.types.PropertyGroup):
     radius_scale: FloatProperty(
-        name="Radius Scale", min=0.0, soft_max=10.0, default=1.0,
-        description="Multiplies every scattering distance (0: no "
-        "scattering)")
+        name="Scene Radius Scale", min=0.0, soft_max=10.0, default=1.0,
+        description="Multiplies every material's scattering distances "
+        "(0: no scattering)")
     # Stored as the method's value in the library (0 = separable).
     method: EnumProperty(name="Method", items=method_items)
     taps: IntProperty(
-        name="Quality (taps)", min=1, max=4097, default=33,
-        description="Taps per 1-D pass; wider kernels are sampled with "
-        "this many taps")
+        name="Taps", min=1, max=4097, default=33,
+        description="Samples per 1-D pass of the separable methods: more "
+        "is smoother on wide blurs and slower")
     output_dir: StringProperty(
         name="Output Folder", subtype="DIR_PATH", default="",
         description="Where passes and results go (empty: a temporary "
@@ -206,7 +209,7 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
     transmission_samples: IntProperty(
         name="Back-Light Samples", min=0, max=65536, default=0,
         description="Samples of the back-light layer (its light is "
-        "blurred, so few do); 0 = a quarter of the scene's, at least 4")
+        "blurred, so few do); 0: a quarter of the scene's, at least 4")
     last_result: StringProperty(name="Last Result", subtype="FILE_PATH",
                                 default="")
 

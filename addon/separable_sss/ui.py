@@ -1,51 +1,88 @@
-"""Panels: the SSS tab of the compositor's sidebar (scene settings, what
-scatters, the active material) and a Screen-Space SSS panel in Material
-Properties with the same per-material settings."""
+"""Panels. The compositor sidebar's SSS tab: the everyday controls first
+(the two actions, the scene's switch, the method, the scene's radius
+scale), what scatters, the active material, and the rest in a closed
+Advanced panel, as Cycles does. Material Properties > Screen-Space SSS:
+the same per-material settings, with Transmission and Advanced as
+sub-panels. Explanations live in tooltips; a panel line says what a
+setting resolves to (a zero that means automatic shows its value)."""
 import textwrap
 
 import bpy
 
 from . import nodes, pipeline, transmission
 from .presets import SSS_MT_material_presets
+from .properties import method_items
+
+# Labels longer than this are cut in a split layout (label left, field
+# right) at the Properties editor's default width: such fields get the
+# whole row instead.
+SPLIT_LABEL_CHARS = 11
 
 
-def _wrapped(layout, context, text, icon='NONE'):
-    """A label wrapped to the region's width (sidebars are narrow)."""
+def _wrapped(layout, context, text, icon='NONE', lines=2):
+    """A label wrapped to the region's width (sidebars are narrow), at most
+    `lines` lines (the rest is cut with an ellipsis)."""
     region = getattr(context, "region", None)
     width = region.width if region is not None else 300
     scale = context.preferences.view.ui_scale
     chars = max(16, int((width - 50.0 * scale) / (7.5 * scale)))
     col = layout.column(align=True)
-    for i, line in enumerate(textwrap.wrap(text, chars) or [""]):
+    wrapped = textwrap.wrap(text, chars) or [""]
+    if len(wrapped) > lines:
+        wrapped = textwrap.wrap(text, chars, max_lines=lines,
+                                placeholder="...")
+    for i, line in enumerate(wrapped):
         col.label(text=line, icon=icon if i == 0 else 'BLANK1')
 
 
-def _scene_problem(scene):
-    """Why Render with SSS is disabled, as one line, or None."""
-    if scene.camera is None:
-        return "The scene has no camera"
-    if scene.render.engine != 'CYCLES':
-        return "Render with Cycles: SSS needs its Material Index pass"
-    return None
-
-
-def _prop(layout, data, name, split):
-    """A property; in the narrow sidebar (no split) an enum or path gets
-    its label on a line of its own, so neither is cut short."""
+def _prop(layout, data, name, split, text=None, **kwargs):
+    """A property that is never cut short: where the label would not fit
+    (an enum or path in the narrow sidebar, a long label in a split
+    layout) it gets a line or the whole row of its own."""
     prop = data.bl_rna.properties[name]
-    if split or (prop.type != 'ENUM' and prop.subtype not in
-                 {'DIR_PATH', 'FILE_PATH'}):
-        layout.prop(data, name)
+    label = prop.name if text is None else text
+    if prop.type == 'ENUM' or prop.subtype in {'DIR_PATH', 'FILE_PATH'}:
+        if split and len(label) <= SPLIT_LABEL_CHARS:
+            layout.prop(data, name, text=label, **kwargs)
+            return
+        col = layout.column(align=True)
+        col.use_property_split = False
+        col.label(text=label + ":")
+        col.prop(data, name, text="", **kwargs)
         return
-    col = layout.column(align=True)
-    col.label(text=prop.name + ":")
-    col.prop(data, name, text="")
+    if split and len(label) > SPLIT_LABEL_CHARS:
+        row = layout.row()
+        row.use_property_split = False
+        row.prop(data, name, text=label, **kwargs)
+        return
+    layout.prop(data, name, text=label, **kwargs)
 
+
+def _auto(layout, data, name, split, resolved):
+    """An integer where 0 means automatic, with what it resolves to."""
+    row = layout.row(align=True)
+    _prop(row, data, name, split)
+    if getattr(data, name) == 0:
+        row.label(text="= %s" % resolved)
+
+
+def _material(context, sidebar):
+    if sidebar:
+        obj = context.object
+        return obj.active_material if obj is not None else None
+    return getattr(context, "material", None)
+
+
+def _has_sss(mat):
+    return mat is not None and getattr(mat, "sss", None) is not None
+
+
+# ------------------------------------------------------------- material
 
 def draw_material_settings(layout, context, mat, split=True):
-    """The per-material block: presets, profile, strength, texturing and
-    the fields of the chosen profile. `split`: labels beside the fields
-    (Properties editor); off in the narrow sidebar."""
+    """The everyday per-material block: presets, profile, strength, radius
+    scale and the chosen profile's own fields. `split`: labels beside the
+    fields (Properties editor); off in the narrow sidebar."""
     s = mat.sss
     layout.context_pointer_set("material", mat)   # for the presets
 
@@ -61,23 +98,15 @@ def draw_material_settings(layout, context, mat, split=True):
     col = layout.column()
     _prop(col, s, "profile", split)
     if s.profile == 'NONE':
-        _wrapped(col, context, "This material is left alone", 'INFO')
+        col.label(text="Not scattered", icon='INFO')
         return
     col.prop(s, "strength", slider=True)
-    _prop(col, s, "texturing", split)
-
-    col = layout.column()
+    _prop(col, s, "radius_scale", split)
     if s.profile == 'BLENDER':
-        _prop(col, s, "mapping", split)
-        _wrapped(col, context, "Radius and colour come from the material's "
-                 "Subsurface inputs", 'INFO')
+        _wrapped(col, context, "Radius and colour come from the material",
+                 'INFO')
     elif s.profile == 'BURLEY':
         col.prop(s, "radius")
-        _prop(col, s, "mapping", split)
-        sub = col.column()
-        sub.active = s.mapping in {'RANDOM_WALK', 'CYCLES_RANDOM_WALK',
-                                   'CYCLES4_RANDOM_WALK', 'AUTO'}
-        sub.prop(s, "albedo")
     elif s.profile == 'GAUSSIANS':
         col.prop(s, "gaussian_scale")
     elif s.profile == 'JIMENEZ':
@@ -86,37 +115,26 @@ def draw_material_settings(layout, context, mat, split=True):
         col.prop(s, "jimenez_falloff")
     elif s.profile == 'NEAR_FAR':
         col.prop(s, "scatter_scale")
-        col.prop(s, "near_far_balance", slider=True)
-        col.prop(s, "near_sigma")
-        col.prop(s, "far_sigma")
-    col.prop(s, "radius_scale")
-    if s.profile in {'BLENDER', 'BURLEY'}:
-        col.prop(s, "match_energy")
-
-    _draw_transmission(layout, context, s, split)
-
-    col = layout.column()
-    col.prop(s, "taps")
-    col.prop(mat, "pass_index")
-    if mat.pass_index == 0:
-        _wrapped(col, context, "Pass index 0: a free one is given for the "
-                 "time of each render", 'INFO')
+        _prop(col, s, "near_far_balance", split, slider=True)
+        _prop(col, s, "near_sigma", split)
+        _prop(col, s, "far_sigma", split)
 
 
-def _draw_transmission(layout, context, s, split):
+def draw_material_transmission(layout, mat, split=True):
     """Back-lit transmission: the model and its fields."""
+    s = mat.sss
+    layout.use_property_split = split
+    layout.use_property_decorate = False
     col = layout.column()
-    _prop(col, s, "transmission", split)
+    col.active = s.profile != 'NONE'
+    _prop(col, s, "transmission", split, text="Model")
     if s.transmission == 'OFF':
         return
-    if s.transmission == 'AUTO':
-        _wrapped(col, context, "Auto: the Profile model for Random Walk "
-                 "materials (measured against Cycles' random walk), off "
-                 "for the others", 'INFO')
     col.prop(s, "transmission_strength", slider=True)
-    col.prop(s, "transmission_color")
+    col.prop(s, "transmission_color", text="Color at Distance"
+             if s.transmission == 'BEER_LAMBERT' else None)
     if s.transmission == 'JIMENEZ':
-        col.prop(s, "transmission_translucency", slider=True)
+        _prop(col, s, "transmission_translucency", split, slider=True)
     elif s.transmission in {'BEER_LAMBERT', 'FAST'}:
         col.prop(s, "transmission_distance")
     if s.transmission == 'FAST':
@@ -127,29 +145,93 @@ def _draw_transmission(layout, context, s, split):
     col.prop(s, "thickness_scale")
 
 
-def _draw_backlight(layout, context, scene):
-    """The scene's back-light layer: the setting, whether this render gets
-    it and why, and what it costs."""
-    s = scene.sss
+def draw_material_advanced(layout, context, mat, split=True):
+    """What most materials never need: texturing, the radius meaning,
+    energy matching, taps and the pass index."""
+    s = mat.sss
+    scene = context.scene
+    layout.use_property_split = split
+    layout.use_property_decorate = False
     col = layout.column()
-    _prop(col, s, "transmission_layer", False)
-    col.prop(s, "transmission_samples")
-    try:
-        need, why = transmission.wanted(scene, pipeline.analyse(scene))
-    except Exception as ex:
-        need, why = False, "could not analyse the scene: %s" % ex
-    if need:
-        _wrapped(col, context, "Back-light layer on (%s), %d samples: %s"
-                 % (why, transmission.layer_samples(scene),
-                    transmission.COST_NOTE), 'LIGHT')
-    else:
-        _wrapped(col, context, "No back-light layer: " + why, 'INFO')
+    col.active = s.profile != 'NONE'
+    _prop(col, s, "texturing", split)
+    if s.profile in {'BLENDER', 'BURLEY'}:
+        _prop(col, s, "mapping", split, text="Radius Meaning")
+        if s.profile == 'BURLEY':
+            sub = col.column()
+            sub.active = s.mapping != 'CYCLES' and s.mapping != 'EEVEE'
+            sub.prop(s, "albedo")
+        _prop(col, s, "match_energy", split)
+    scene_taps = scene.sss.taps if getattr(scene, "sss", None) else 33
+    _auto(col, s, "taps", split, "%d (scene's)" % scene_taps)
+    row = col.row(align=True)
+    row.prop(mat, "pass_index")
+    if mat.pass_index == 0:
+        row.label(text="= free one")
 
 
-class SSS_PT_node_main(bpy.types.Panel):
+class _MaterialPanel:
+    """Shared by the sidebar's Active Material panels (sidebar = True) and
+    Material Properties' (False)."""
+    sidebar = False
+
+    @classmethod
+    def poll(cls, context):
+        return _has_sss(_material(context, cls.sidebar))
+
+
+class SSS_PT_material(_MaterialPanel, bpy.types.Panel):
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "material"
+    bl_label = "Screen-Space SSS"
+
+    def draw(self, context):
+        draw_material_settings(self.layout, context, context.material)
+
+
+class SSS_PT_material_transmission(_MaterialPanel, bpy.types.Panel):
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "material"
+    bl_label = "Transmission"
+    bl_parent_id = "SSS_PT_material"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        draw_material_transmission(self.layout, context.material)
+
+
+class SSS_PT_material_advanced(_MaterialPanel, bpy.types.Panel):
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "material"
+    bl_label = "Advanced"
+    bl_parent_id = "SSS_PT_material"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        draw_material_advanced(self.layout, context, context.material)
+
+
+# -------------------------------------------------------------- sidebar
+
+class _SidebarPanel:
     bl_space_type = 'NODE_EDITOR'
     bl_region_type = 'UI'
     bl_category = "SSS"
+
+
+def _scene_problem(scene):
+    """Why Render with SSS is disabled, as one line, or None."""
+    if scene.camera is None:
+        return "The scene has no camera"
+    if scene.render.engine != 'CYCLES':
+        return "Needs Cycles (its Material Index pass)"
+    return None
+
+
+class SSS_PT_node_main(_SidebarPanel, bpy.types.Panel):
     bl_label = "Screen-Space SSS"
 
     @classmethod
@@ -174,25 +256,17 @@ class SSS_PT_node_main(bpy.types.Panel):
             _wrapped(layout, context, problem, 'ERROR')
 
         col = layout.column()
-        _prop(col, s, "method", False)
-        col.prop(s, "taps")
-        col.prop(s, "radius_scale")
-        _prop(col, s, "output_dir", False)
         col.prop(s, "enabled")
-        _draw_backlight(layout, context, scene)
+        _prop(col, s, "method", False, text="Method (speed or accuracy)")
+        # What the method trades, in the library's words.
+        summary = next((item[2] for item in method_items()
+                        if item[0] == s.method), "")
+        if summary:
+            _wrapped(col, context, summary)
+        col.prop(s, "radius_scale")
 
-        col = layout.column(align=True)
-        if s.last_result:
-            col.label(text="Last result:")
-            col.prop(s, "last_result", text="")
-        if nodes.find_result(scene) is not None:
-            col.operator("sss.remove_setup", icon='X')
 
-
-class SSS_PT_node_found(bpy.types.Panel):
-    bl_space_type = 'NODE_EDITOR'
-    bl_region_type = 'UI'
-    bl_category = "SSS"
+class SSS_PT_node_found(_SidebarPanel, bpy.types.Panel):
     bl_label = "Found in Scene"
     bl_parent_id = "SSS_PT_node_main"
 
@@ -209,75 +283,126 @@ class SSS_PT_node_found(bpy.types.Panel):
                      % ex, 'ERROR')
             return
         if not analysis.found:
-            _wrapped(layout, context, "No material scatters: the render is "
-                     "left alone", 'INFO')
+            layout.label(text="No material scatters", icon='INFO')
         col = layout.column(align=True)
         for found in analysis.found:
-            self._draw_found(col.box(), context, scene, found)
+            self._draw_found(col.box(), scene, found)
         for message in analysis.messages:
             _wrapped(layout, context, message, 'INFO')
-        if analysis.found:
-            layout.operator("sss.assign_pass_indices", icon='LINENUMBERS_ON')
 
     @staticmethod
-    def _draw_found(box, context, scene, found):
+    def _draw_found(box, scene, found):
         s = found.material.sss
-        row = box.row()
-        row.label(text=found.name, icon='MATERIAL')
-        row.label(text="Index %d" % found.pass_index if found.pass_index
-                  else "Index auto")
         col = box.column(align=True)
-        col.label(text=s.bl_rna.properties["profile"].enum_items[
-            s.profile].name)
+        col.label(text=found.name, icon='MATERIAL')
+        profile = s.bl_rna.properties["profile"].enum_items[s.profile].name
+        col.label(text=profile)
         if s.profile in {'BLENDER', 'BURLEY'}:
             radius = found.radius if s.profile == 'BLENDER' else s.radius
             col.label(text="Radius %s mm" % " / ".join(
-                "%.3g" % (r * 1000.0) for r in radius))
+                "%.2g" % (r * 1000.0) for r in radius))
         try:
             px = pipeline.kernel_pixels(scene, found)
         except Exception:
             return
         if not px:
-            col.label(text="Kernel size unknown")
+            col.label(text="Blur size unknown")
         elif px < 1.0:
-            col.label(text="Kernel %.1f px: hardly visible" % px,
-                      icon='INFO')
+            col.label(text="Blur under a pixel: hardly visible", icon='INFO')
         else:
-            col.label(text="Kernel radius %.1f px" % px)
+            col.label(text="Blurs up to %d px here" % round(px))
 
 
-class SSS_PT_node_material(bpy.types.Panel):
-    bl_space_type = 'NODE_EDITOR'
-    bl_region_type = 'UI'
-    bl_category = "SSS"
+class SSS_PT_node_material(_MaterialPanel, _SidebarPanel, bpy.types.Panel):
     bl_label = "Active Material"
     bl_parent_id = "SSS_PT_node_main"
+    sidebar = True
+
+    @classmethod
+    def poll(cls, context):
+        return True     # says what to do when there is no material
 
     def draw(self, context):
         layout = self.layout
-        obj = context.object
-        mat = obj.active_material if obj is not None else None
-        if mat is None:
-            _wrapped(layout, context, "Select an object with a material to "
-                     "edit its SSS settings", 'INFO')
+        mat = _material(context, True)
+        if not _has_sss(mat):
+            _wrapped(layout, context, "Select an object with a material",
+                     'INFO')
             return
         layout.label(text=mat.name, icon='MATERIAL')
         draw_material_settings(layout, context, mat, split=False)
 
 
-class SSS_PT_material(bpy.types.Panel):
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
-    bl_context = "material"
-    bl_label = "Screen-Space SSS"
+class SSS_PT_node_material_transmission(_MaterialPanel, _SidebarPanel,
+                                        bpy.types.Panel):
+    bl_label = "Transmission"
+    bl_parent_id = "SSS_PT_node_material"
+    bl_options = {'DEFAULT_CLOSED'}
+    sidebar = True
+
+    def draw(self, context):
+        draw_material_transmission(self.layout, _material(context, True),
+                                   split=False)
+
+
+class SSS_PT_node_material_advanced(_MaterialPanel, _SidebarPanel,
+                                    bpy.types.Panel):
+    bl_label = "Advanced"
+    bl_parent_id = "SSS_PT_node_material"
+    bl_options = {'DEFAULT_CLOSED'}
+    sidebar = True
+
+    def draw(self, context):
+        draw_material_advanced(self.layout, context,
+                               _material(context, True), split=False)
+
+
+def _draw_backlight(layout, context, scene):
+    """The scene's back-light layer: the setting, its samples, and whether
+    the next render gets it."""
+    s = scene.sss
+    col = layout.column()
+    _prop(col, s, "transmission_layer", False)
+    _auto(col, s, "transmission_samples", False,
+          transmission.layer_samples(scene))
+    try:
+        need, why = transmission.wanted(scene, pipeline.analyse(scene))
+    except Exception as ex:
+        need, why = False, "cannot tell: %s" % ex
+    _wrapped(col, context, ("Next render: on, " if need else
+                            "Next render: off, ") + why,
+             'LIGHT' if need else 'INFO')
+
+
+class SSS_PT_node_advanced(_SidebarPanel, bpy.types.Panel):
+    """The scene's rarely changed settings, a panel of its own below the
+    main one (the material's Advanced is inside Active Material)."""
+    bl_label = "Advanced"
+    bl_options = {'DEFAULT_CLOSED'}
 
     @classmethod
     def poll(cls, context):
-        mat = getattr(context, "material", None)
-        return mat is not None and getattr(mat, "sss", None) is not None
+        return SSS_PT_node_main.poll(context)
 
     def draw(self, context):
-        draw_material_settings(self.layout, context, context.material)
+        layout = self.layout
+        scene = context.scene
+        s = scene.sss
+        col = layout.column()
+        col.prop(s, "taps")
+        _prop(col, s, "output_dir", False)
+        if not s.output_dir:
+            _wrapped(col, context, "Empty: " + pipeline.output_path(scene))
+        _draw_backlight(layout, context, scene)
+
+        col = layout.column(align=True)
+        if s.last_result:
+            col.label(text="Last result:")
+            col.prop(s, "last_result", text="")
+        if pipeline.analyse(scene).found:
+            col.operator("sss.assign_pass_indices", icon='LINENUMBERS_ON')
+        if nodes.find_result(scene) is not None:
+            col.operator("sss.remove_setup", icon='X')
 
 
 class SSS_PT_render(bpy.types.Panel):
@@ -297,13 +422,19 @@ class SSS_PT_render(bpy.types.Panel):
 
     def draw(self, context):
         s = context.scene.sss
-        col = self.layout.column()
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        col = layout.column()
         col.active = s.enabled
-        _prop(col, s, "method", False)
-        col.prop(s, "radius_scale")
+        _prop(col, s, "method", True)
+        _prop(col, s, "radius_scale", True)
 
 
 classes = (SSS_PT_node_main, SSS_PT_node_found, SSS_PT_node_material,
-           SSS_PT_material, SSS_PT_render)
+           SSS_PT_node_material_transmission, SSS_PT_node_material_advanced,
+           SSS_PT_node_advanced, SSS_PT_material,
+           SSS_PT_material_transmission, SSS_PT_material_advanced,
+           SSS_PT_render)
 
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -1,0 +1,88 @@
+"""The add-on behaves as Blender's own tools do: Render with SSS is one undo
+step, Apply SSS to Last Render is greyed out (with the reason) when there
+is no render it can use, and every zero-means-automatic setting resolves
+to a value the panels can show."""
+import bpy
+import pytest
+
+from helpers import build_blend, compat, load_addon
+
+separable_sss = load_addon()
+from separable_sss import nodes, pipeline, transmission  # noqa: E402
+from separable_sss.properties import method_items  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    separable_sss.register()
+    yield
+    separable_sss.unregister()
+
+
+@pytest.fixture(scope="module")
+def blend(tmp_path_factory):
+    return build_blend("two", str(tmp_path_factory.mktemp("b") / "two.blend"))
+
+
+def open_scene(path, out_dir):
+    bpy.ops.wm.open_mainfile(filepath=path)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(out_dir)
+    return scene
+
+
+def test_render_with_sss_is_one_undo_step(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    bpy.ops.ed.undo_push(message="before")
+    assert nodes.find_result(scene) is None
+    # As a button does it: an undo step if the operator asks for one.
+    assert bpy.ops.sss.render('EXEC_DEFAULT', True) == {'FINISHED'}
+    assert nodes.find_result(bpy.context.scene) is not None
+    assert bpy.context.scene.sss.last_result
+    bpy.ops.ed.undo()
+    scene = bpy.context.scene
+    assert nodes.find_result(scene) is None, "undo left the SSS nodes"
+    assert scene.sss.last_result == ""
+    bpy.ops.ed.redo()
+    assert nodes.find_result(bpy.context.scene) is not None
+
+
+def test_apply_greyed_out_without_a_usable_render(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    for image in [i for i in bpy.data.images if i.type == 'RENDER_RESULT']:
+        bpy.data.images.remove(image)
+    assert not bpy.ops.sss.apply.poll()
+    with pytest.raises(RuntimeError, match="no render yet"):
+        bpy.ops.sss.apply()
+    # A plain render without the passes the library reads.
+    layer = scene.view_layers[0]
+    layer.use_pass_material_index = False
+    layer.use_pass_diffuse_direct = False
+    scene.render.resolution_percentage = 25
+    bpy.ops.render.render()
+    assert not bpy.ops.sss.apply.poll()
+    with pytest.raises(RuntimeError, match="Material Index"):
+        bpy.ops.sss.apply()
+    # Render with SSS renders them: Apply is available again.
+    assert bpy.ops.sss.render() == {'FINISHED'}
+    assert bpy.ops.sss.apply.poll()
+    assert bpy.ops.sss.apply() == {'FINISHED'}
+
+
+def test_automatic_values_resolve(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    scene.sss.transmission_samples = 0
+    scene.cycles.samples = 40
+    assert transmission.layer_samples(scene) == 10
+    scene.sss.output_dir = ""
+    assert pipeline.output_path(scene).endswith("separable_sss")
+    # The method's summary the panel shows is the library's.
+    assert all(len(item[2]) < 80 for item in method_items())
+
+
+def test_compositor_nodes_left_unselected(blend, tmp_path):
+    scene = open_scene(blend, tmp_path)
+    assert bpy.ops.sss.render() == {'FINISHED'}
+    tree = compat.compositor_tree(scene)
+    ours = [n for n in tree.nodes if n.get(nodes.ROLE_KEY)]
+    assert ours and not any(n.select for n in ours)
