@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 5
+#define SSS_ABI_VERSION 6
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -466,6 +466,11 @@ typedef struct sss_exr_options {
 	 * sees it exist unannounced. NULL = not told. */
 	void (*temporary_fn)(const char *path, void *user);
 	void *temporary_user;
+	/* Called on the calling thread with the share of the work done, in
+	 * (0, 1]: reading, once the pixels are decoded; writing, after each
+	 * round of chunks written. NULL = not told. */
+	void (*progress_fn)(double done, void *user);
+	void *progress_user;
 } sss_exr_options;
 
 SSS_API void sss_exr_options_default(sss_exr_options *opt);
@@ -579,6 +584,13 @@ typedef struct sss_process_options {
 	int32_t num_threads;   /* 0..256, or -1 = the scene's */
 	sss_exr_options exr;   /* size caps and output compression */
 	int32_t samples;       /* 1..4096, or -1 = the scene's (disk method) */
+	/* Called on the calling thread as the frame goes: the stage ("read",
+	 * "scatter", "write", in that order) and the share of that stage
+	 * done, 0 when it starts, 1 when it ends (writing: after each round
+	 * of chunks). What a progress bar shows. NULL = not told; the exr
+	 * options' own progress_fn is not used. */
+	void (*progress_fn)(const char *stage, double done, void *user);
+	void *progress_user;
 } sss_process_options;
 
 typedef struct sss_timings {

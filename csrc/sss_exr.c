@@ -1001,6 +1001,8 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 		return r;
 	}
 	*out = exr;
+	if (o.progress_fn)
+		o.progress_fn(1.0, o.progress_user);
 	return SSS_OK;
 }
 
@@ -1383,9 +1385,10 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 }
 
 static exr_result_t encode_chunks(exr_context_t c, int part,
-                                  const sss_exr *exr, int32_t threads,
-                                  int32_t *bad_y)
+                                  const sss_exr *exr,
+                                  const sss_exr_options *o, int32_t *bad_y)
 {
+	int32_t threads = o->num_threads;
 	const exr_attr_chlist_t *cl = NULL;
 	int32_t lines = 0;
 	exr_result_t rv = exr_get_channels(c, part, &cl);
@@ -1451,6 +1454,8 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 					raw ? e->packed_buffer : e->compressed_buffer,
 					raw ? e->packed_bytes : e->compressed_bytes);
 		}
+		if (rv == EXR_ERR_SUCCESS && o->progress_fn)
+			o->progress_fn((double)(first + n) / chunks, o->progress_user);
 	}
 	for (int32_t s = 0; job.started && s < slots; s++)
 		if (job.started[s])
@@ -1577,7 +1582,7 @@ static sss_result write_file(const sss_exr *exr, const sss_exr_options *o,
 		rv = exr_write_header(c);
 	}
 	if (rv == EXR_ERR_SUCCESS && exr->pass_count > 0) {
-		rv = encode_chunks(c, part, exr, o->num_threads, &bad_y);
+		rv = encode_chunks(c, part, exr, o, &bad_y);
 		if (rv != EXR_ERR_SUCCESS)
 			snprintf(step, sizeof step, "encoding the scanlines at y %d",
 			         bad_y);

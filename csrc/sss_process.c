@@ -103,6 +103,26 @@ static sss_result back_light_passes(const sss_exr *exr, const char *layer,
 	return SSS_OK;
 }
 
+/* The caller's progress_fn, told which stage the EXR options' own
+ * progress belongs to. */
+typedef struct progress {
+	const sss_process_options *opt;
+	const char *stage;
+} progress;
+
+static void stage_progress(double done, void *user)
+{
+	const progress *p = user;
+	p->opt->progress_fn(p->stage, done, p->opt->progress_user);
+}
+
+static void tell(progress *p, const char *stage, double done)
+{
+	p->stage = stage;
+	if (p->opt->progress_fn)
+		p->opt->progress_fn(stage, done, p->opt->progress_user);
+}
+
 sss_result sss_process_exr(const char *in, const char *out,
                            const sss_scene *scene,
                            const sss_process_options *user_opt,
@@ -134,7 +154,11 @@ sss_result sss_process_exr(const char *in, const char *out,
 	sss_exr *exr = NULL;
 	float *combined = NULL, *light = NULL, *thickness = NULL;
 	sss_result r;
+	progress prog = {&opt, "read"};
+	opt.exr.progress_fn = opt.progress_fn ? stage_progress : NULL;
+	opt.exr.progress_user = &prog;
 
+	tell(&prog, "read", 0.0);
 	double t0 = now();
 	if ((r = sss_exr_read(in, &opt.exr, &exr, err, errlen)))
 		goto done;
@@ -176,6 +200,7 @@ sss_result sss_process_exr(const char *in, const char *out,
 	const sss_material *mats = sss_scene_materials(scene, &count);
 	sss_image oc = {combined, w, h, 4, 0}, ol = {light, w, h, 3, 0};
 	char detail[512];
+	tell(&prog, "scatter", 0.0);
 	t0 = now();
 	r = sss_apply(&passes, sss_scene_camera(scene), mats, count, &o, &oc, &ol,
 	              detail, sizeof detail);
@@ -186,6 +211,8 @@ sss_result sss_process_exr(const char *in, const char *out,
 		goto done;
 	}
 
+	tell(&prog, "scatter", 1.0);
+	tell(&prog, "write", 0.0);
 	t0 = now();
 	if ((r = sss_exr_add_pass(exr, SSS_RESULT_LAYER, "Combined", "RGBA", combined, err,
 	                          errlen)) ||

@@ -1778,6 +1778,57 @@ static void cleanup(const char *dir)
 	rmdir(dir);
 }
 
+/* sss_process_exr says where it is: read, scatter and write in order,
+ * each from 0 to 1, the write in rounds of chunks, all on this thread. */
+static struct {
+	char stage[16][16];
+	double done[16];
+	int n;
+} seen;
+
+static void on_progress(const char *stage, double done, void *user)
+{
+	(void)user;
+	if (seen.n < 16) {
+		snprintf(seen.stage[seen.n], sizeof seen.stage[0], "%s", stage);
+		seen.done[seen.n] = done;
+	}
+	seen.n++;
+}
+
+static void test_progress(void)
+{
+	char err[512], out[128];
+	sss_scene *scene = NULL;
+	tpath(out, sizeof out, "progress.exr");
+	CHECK_STATUS("progress.scene", SSS_OK,
+	             sss_scene_load("tests/data/blender_8x8.json", &scene, NULL,
+	                            0, err, sizeof err));
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	opt.progress_fn = on_progress;
+	CHECK_STATUS("progress.run", SSS_OK,
+	             sss_process_exr("tests/data/blender_8x8.exr", out, scene,
+	                             &opt, NULL, err, sizeof err));
+	sss_scene_free(scene);
+	static const char *order[] = {"read", "scatter", "write"};
+	int stage = 0, ok = seen.n >= 6 && seen.n <= 16;
+	double last = -1.0;
+	for (int i = 0; ok && i < seen.n; i++) {
+		if (strcmp(seen.stage[i], order[stage]) != 0) {
+			ok = last == 1.0 && stage < 2 &&
+			     strcmp(seen.stage[i], order[stage + 1]) == 0;
+			stage++;
+			last = -1.0;
+		}
+		ok = ok && seen.done[i] >= last && seen.done[i] <= 1.0 &&
+		     (last >= 0.0 || seen.done[i] == 0.0);
+		last = seen.done[i];
+	}
+	CHECK("progress.order", ok && stage == 2 && last == 1.0,
+	      "%d calls, stage %d, last %g", seen.n, stage, last);
+}
+
 int main(void)
 {
 	snprintf(tmpdir, sizeof tmpdir, "/tmp/sss_exr_XXXXXX");
@@ -1798,6 +1849,7 @@ int main(void)
 	test_dwa();
 	test_missing_passes();
 	test_write_safety();
+	test_progress();
 	cleanup(tmpdir);
 	return tu_finish("test_exr");
 }

@@ -17,7 +17,7 @@ if "bpy" in locals():
     import importlib
     for _m in (blender_compat, native, errors, analysis,  # noqa: F821
                lighting, description, transmission,  # noqa: F821
-               switch_off, nodes, pipeline,  # noqa: F821
+               switch_off, nodes, pipeline, preferences,  # noqa: F821
                properties, presets, operators, ui, render_flow):  # noqa: F821
         importlib.reload(_m)
 
@@ -25,10 +25,10 @@ import bpy  # noqa: E402,F401
 
 from . import (analysis, blender_compat, description,  # noqa: E402
                errors, lighting, native, nodes, operators, pipeline,
-               presets, properties, render_flow, switch_off, transmission,
-               ui)
+               preferences, presets, properties, render_flow, switch_off,
+               transmission, ui)
 
-_modules = (properties, presets, operators, ui, render_flow)
+_modules = (preferences, properties, presets, operators, ui, render_flow)
 
 
 def register():

@@ -8,7 +8,7 @@ import json
 import os
 import threading
 
-ABI_VERSION = 5  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 6  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -30,7 +30,14 @@ class ExrOptions(ctypes.Structure):
                 ("compression", ctypes.c_int32),
                 ("num_threads", ctypes.c_int32),
                 ("temporary_fn", ctypes.c_void_p),
-                ("temporary_user", ctypes.c_void_p)]
+                ("temporary_user", ctypes.c_void_p),
+                ("progress_fn", ctypes.c_void_p),
+                ("progress_user", ctypes.c_void_p)]
+
+
+# sss_process_options.progress_fn: (stage, share of it done, user)
+ProgressFn = ctypes.CFUNCTYPE(None, ctypes.c_char_p, ctypes.c_double,
+                              ctypes.c_void_p)
 
 
 class ProcessOptions(ctypes.Structure):
@@ -40,7 +47,9 @@ class ProcessOptions(ctypes.Structure):
                 ("radius_scale", ctypes.c_float),
                 ("num_threads", ctypes.c_int32),
                 ("exr", ExrOptions),
-                ("samples", ctypes.c_int32)]
+                ("samples", ctypes.c_int32),
+                ("progress_fn", ProgressFn),
+                ("progress_user", ctypes.c_void_p)]
 
 
 class Image(ctypes.Structure):
@@ -54,13 +63,33 @@ class Timings(ctypes.Structure):
                 ("write", ctypes.c_double)]
 
 
+# The add-on's Preferences > Library (preferences.py); "" = not set.
+_preferred_path = ""
+
+
+def set_preferred_path(path):
+    """The library the add-on's preferences name, tried after $SSS_LIB. A
+    library already loaded stays loaded (ctypes cannot unload one): the
+    new path counts from the next start of Blender."""
+    global _preferred_path
+    _preferred_path = path or ""
+
+
+def loaded_path():
+    """The path the library was loaded from, or None."""
+    return getattr(_lib, "_name", None) if _lib is not None else None
+
+
 def candidates():
-    """Where the library may be: $SSS_LIB, beside this file (the legacy
-    zip), in the wheel the extension installs (package libsss_native), or
-    the checkout's build folder (running from the repository)."""
+    """Where the library may be: $SSS_LIB, the path in the add-on's
+    preferences, beside this file (the legacy zip), in the wheel the
+    extension installs (package libsss_native), or the checkout's build
+    folder (running from the repository)."""
     env = os.environ.get("SSS_LIB")
     if env:
         yield env
+    if _preferred_path:
+        yield _preferred_path
     yield os.path.join(_HERE, "libsss.so")
     spec = importlib.util.find_spec("libsss_native")
     if spec is not None and spec.origin:
@@ -291,9 +320,12 @@ class Scene:
         self.close()
 
     def process(self, input_exr, output_exr, *, method=None,
-                radius_scale=1.0, threads=None, layer=None, samples=None):
+                radius_scale=1.0, threads=None, layer=None, samples=None,
+                progress=None):
         """One frame through the library; returns the timings as a dict.
-        Releases the GIL for the duration (ctypes does)."""
+        Releases the GIL for the duration (ctypes does). progress(stage,
+        done) is told where the frame is (sss_process_options), on the
+        calling thread."""
         lib = library()
         opt = ProcessOptions()
         lib.sss_process_options_default(ctypes.byref(opt))
@@ -306,6 +338,11 @@ class Scene:
             opt.samples = samples
         if layer:
             opt.layer = layer.encode()
+        if progress is not None:
+            # Kept referenced for the call: the library holds the pointer.
+            callback = ProgressFn(lambda stage, done, _user: progress(
+                stage.decode(), done))
+            opt.progress_fn = callback
         timings = Timings()
         err = ctypes.create_string_buffer(4096)
         code = lib.sss_process_exr(os.fsencode(input_exr),

@@ -95,14 +95,33 @@ def _record_render(scene, *_args):
 class _Run:
     """State shared with the worker thread: no bpy in here."""
 
+    # The library's stages and the share of a frame's time each takes on
+    # the bundled scenes (writing the EXR dominates): the bar moves by
+    # what is done, not by the clock.
+    STAGES = (("read", 0.3), ("scatter", 0.2), ("write", 0.5))
+
     def __init__(self, job):
         self.job = job
         self.error = None
         self.started = time.monotonic()
+        self.stage, self.done = "read", 0.0
+
+    def progress(self, stage, done):
+        """Called by the library on the worker thread."""
+        self.stage, self.done = stage, done
+
+    def fraction(self):
+        """Share of the whole run done, 0..1."""
+        total = 0.0
+        for stage, weight in self.STAGES:
+            if stage == self.stage:
+                return total + weight * self.done
+            total += weight
+        return total
 
     def __call__(self):
         try:
-            pipeline.scatter(self.job)
+            pipeline.scatter(self.job, progress=self.progress)
         except Exception as ex:   # reported on the main thread
             self.error = ex
 
@@ -172,12 +191,13 @@ class _SSSRunBase:
         if event.type != 'TIMER':
             return {'PASS_THROUGH'}
         if _worker is not None and _worker.is_alive():
-            elapsed = time.monotonic() - self._run.started
-            # No progress callback from the library: a curve that creeps
-            # towards 95 % shows that it is alive.
+            run = self._run
             context.window_manager.progress_update(
-                int(95.0 * (1.0 - 1.0 / (1.0 + elapsed / 3.0))))
-            self._status(context, "Scattering: %.1f s" % elapsed)
+                int(100.0 * run.fraction()))
+            self._status(context, "%s %d %% (%.1f s; Esc: stop waiting)" % (
+                {"read": "Reading the passes", "scatter": "Scattering",
+                 "write": "Writing the result"}.get(run.stage, run.stage),
+                int(100.0 * run.done), time.monotonic() - run.started))
             return {'PASS_THROUGH'}
         self._cleanup(context)
         if self._run.error is not None:

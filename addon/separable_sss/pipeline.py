@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import analysis, native, nodes
+from . import analysis, native, nodes, preferences
 from . import blender_compat as compat
 from .analysis import Analysis, Found, analyse  # noqa: F401
 from .description import (library_material, scene_description,  # noqa: F401
@@ -33,10 +33,14 @@ class Job:
 
 
 def output_path(scene):
-    """The folder for passes and results: the scene's setting, else a
-    per-user temporary folder (nothing is created)."""
-    return bpy.path.abspath(scene.sss.output_dir) if scene.sss.output_dir \
-        else os.path.join(tempfile.gettempdir(), "separable_sss")
+    """The folder for passes and results: the scene's setting, else the
+    add-on's default (Preferences), else a per-user temporary folder
+    (nothing is created)."""
+    prefs = preferences.get()
+    for path in (scene.sss.output_dir, prefs.output_dir if prefs else ""):
+        if path:
+            return bpy.path.abspath(path)
+    return os.path.join(tempfile.gettempdir(), "separable_sss")
 
 
 def output_dir(scene):
@@ -142,8 +146,9 @@ def prepare_last_render(context):
                summary=f"{len(found.found)} scattering material(s)")
 
 
-def scatter(job):
-    """Runs the library on the job's files. No bpy: thread-safe."""
+def scatter(job, progress=None):
+    """Runs the library on the job's files. No bpy: thread-safe.
+    progress(stage, done): where the frame is (native.Scene.process)."""
     try:
         with native.Scene(job.scene_json) as scene:
             radius_scale = job.radius_scale
@@ -151,7 +156,8 @@ def scatter(job):
                 radius_scale = -1.0  # the library refuses it: a real error
             job.timings = scene.process(job.input_exr, job.output_exr,
                                         radius_scale=radius_scale,
-                                        layer=job.layer or None)
+                                        layer=job.layer or None,
+                                        progress=progress)
     except native.LibraryError as e:
         raise SSSError(str(e)) from None
     return job

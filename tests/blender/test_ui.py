@@ -2,13 +2,15 @@
 step, Apply SSS to Last Render is greyed out (with the reason) when there
 is no render it can use, and every zero-means-automatic setting resolves
 to a value the panels can show."""
+import os
+
 import bpy
 import pytest
 
 from helpers import build_blend, compat, load_addon
 
 separable_sss = load_addon()
-from separable_sss import nodes, pipeline, transmission  # noqa: E402
+from separable_sss import native, nodes, pipeline, transmission  # noqa: E402,E501
 from separable_sss.properties import method_items  # noqa: E402
 
 
@@ -86,3 +88,32 @@ def test_compositor_nodes_left_unselected(blend, tmp_path):
     tree = compat.compositor_tree(scene)
     ours = [n for n in tree.nodes if n.get(nodes.ROLE_KEY)]
     assert ours and not any(n.select for n in ours)
+
+
+def test_preferences_name_the_library():
+    native.set_preferred_path("/opt/sss/libsss.so")
+    try:
+        paths = list(native.candidates())
+        # $SSS_LIB first (farms set it), then the preference.
+        first = 1 if os.environ.get("SSS_LIB") else 0
+        assert paths.index("/opt/sss/libsss.so") == first
+    finally:
+        native.set_preferred_path("")
+    assert "/opt/sss/libsss.so" not in native.candidates()
+    assert native.loaded_path() is None or native.loaded_path().endswith(
+        "libsss.so")
+
+
+def test_progress_is_the_librarys(blend, tmp_path):
+    """The progress bar follows the library's stages, not the clock."""
+    open_scene(blend, tmp_path)
+    job = pipeline.prepare_render(bpy.context)
+    seen = []
+    pipeline.scatter(job, progress=lambda stage, done: seen.append(
+        (stage, done)))
+    assert [s for s, _ in seen][0] == "read" and seen[-1] == ("write", 1.0)
+    stages = [s for s, _ in seen]
+    assert stages.index("scatter") > stages.index("read")
+    assert stages.index("write") > stages.index("scatter")
+    writes = [d for s, d in seen if s == "write"]
+    assert writes == sorted(writes) and writes[0] == 0.0
