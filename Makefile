@@ -40,10 +40,11 @@ WARN    := -std=c11 -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes \
            -Wmissing-prototypes
 BASE    := $(WARN) -fPIC -fvisibility=hidden -ffp-contract=off \
            -D_POSIX_C_SOURCE=200809L -pthread
-# OpenEXR's C API (OpenEXRCore) and cJSON, both from Debian.
+# OpenEXR's C API (OpenEXRCore), libdeflate (its ZIP chunks, faster than
+# the zlib OpenEXRCore calls) and cJSON, all from Debian.
 EXR_INC := $(shell pkg-config --cflags-only-I OpenEXR 2>/dev/null || echo -I/usr/include/OpenEXR)
 LIB_INC := $(EXR_INC) -I/usr/include/cjson
-LDLIBS  := -lOpenEXRCore -lcjson -lm -pthread
+LDLIBS  := -lOpenEXRCore -ldeflate -lcjson -lm -pthread
 
 LIB_SRC   := $(sort $(filter-out csrc/sss_main.c,$(wildcard csrc/sss_*.c)))
 LIB_HDR   := csrc/sss.h csrc/sss_internal.h csrc/sss_blur1d.h \

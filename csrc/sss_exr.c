@@ -4,6 +4,7 @@
 #define _DEFAULT_SOURCE /* flock */
 #include "sss_internal.h"
 
+#include <libdeflate.h>
 #include <openexr.h>
 
 #include <errno.h>
@@ -539,6 +540,7 @@ typedef struct read_job {
 	const chan_ref *ref;     /* per source channel */
 	int tiled;
 	int b44;                 /* B44 or B44A: see raw_chunk */
+	int zip;                 /* ZIP or ZIPS: see zip_decompress */
 	int32_t lines;           /* scanlines per chunk */
 	int32_t tile_w, tile_h, tiles_x;
 	xio *io;
@@ -629,12 +631,66 @@ static exr_result_t raw_chunk(exr_decode_pipeline_t *dec)
 
 /* Decodes chunks [c0, c1) with one pipeline; every channel goes straight
  * to its place in its pass (interleaved), halves and uints converted. */
+/* ZIP and ZIPS chunks are inflated by libdeflate (about twice as fast as
+ * the zlib OpenEXRCore 3.1 calls), then OpenEXR's byte preparation is
+ * undone as its undo_zip_impl does: each byte is the one before plus the
+ * stored difference less 128, and the two halves are interleaved back.
+ * A chunk stored raw (as long as its pixels) is used as it is. */
+typedef struct unzip_state {
+	struct libdeflate_decompressor *inflate;
+	uint8_t *scratch;
+	size_t cap;
+} unzip_state;
+
+static exr_result_t zip_decompress(exr_decode_pipeline_t *dec)
+{
+	unzip_state *z = dec->decoding_user_data;
+	size_t n = (size_t)dec->chunk.unpacked_size;
+	size_t packed = (size_t)dec->chunk.packed_size;
+	uint8_t *out = dec->unpacked_buffer;
+	if (packed == n) {
+		if (dec->unpacked_buffer != dec->packed_buffer)
+			memcpy(out, dec->packed_buffer, n);
+		return EXR_ERR_SUCCESS;
+	}
+	if (n == 0 || !out)
+		return EXR_ERR_CORRUPT_CHUNK;
+	if (z->cap < n) {
+		free(z->scratch);
+		z->cap = 0;
+		if (!(z->scratch = malloc(n)))
+			return EXR_ERR_OUT_OF_MEMORY;
+		z->cap = n;
+	}
+	size_t in_used = 0, got = 0;
+	if (libdeflate_zlib_decompress_ex(z->inflate, dec->packed_buffer, packed,
+	                                  z->scratch, n, &in_used, &got) !=
+	        LIBDEFLATE_SUCCESS || got != n)
+		return EXR_ERR_CORRUPT_CHUNK;
+	uint8_t *t = z->scratch;
+	for (size_t i = 1; i < n; i++)
+		t[i] = (uint8_t)(t[i - 1] + t[i] - 128);
+	const uint8_t *even = t, *odd = t + (n + 1) / 2;
+	for (size_t i = 0; i + 1 < n; i += 2) {
+		out[i] = *even++;
+		out[i + 1] = *odd++;
+	}
+	if (n % 2)
+		out[n - 1] = *even;
+	return EXR_ERR_SUCCESS;
+}
+
 static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 {
 	read_job *job = arg;
 	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
 	exr_result_t (*decompress)(exr_decode_pipeline_t *) = NULL;
+	unzip_state unzip = {NULL, NULL, 0};
 	int started = 0;
+	if (job->zip && !(unzip.inflate = libdeflate_alloc_decompressor())) {
+		job_fail(job, EXR_ERR_OUT_OF_MEMORY, 0, 0);
+		return;
+	}
 	for (int32_t i = c0; i < c1 && !job_failed(job); i++) {
 		exr_chunk_info_t ci;
 		int32_t x0 = 0, y0 = 0;
@@ -660,6 +716,10 @@ static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 			rv = exr_decoding_choose_default_routines(job->ctxt,
 			                                          job->part, &dec);
 			decompress = dec.decompress_fn;
+			if (job->zip && dec.decompress_fn) {
+				dec.decompress_fn = zip_decompress;
+				dec.decoding_user_data = &unzip;
+			}
 		}
 		if (rv == EXR_ERR_SUCCESS && job->b44)
 			dec.decompress_fn = ci.packed_size == ci.unpacked_size
@@ -673,6 +733,8 @@ static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 	}
 	if (started)
 		exr_decoding_destroy(job->ctxt, &dec);
+	libdeflate_free_decompressor(unzip.inflate);
+	free(unzip.scratch);
 }
 
 /* decode_chunks over chunks 1.. (chunk 0 is decoded first, alone). */
@@ -828,6 +890,7 @@ static sss_result decode_part(sss_exr *exr, const sss_exr_options *o,
 		rv = exr_get_compression(c, part, &comp);
 	job.tiled = storage == EXR_STORAGE_TILED;
 	job.b44 = comp == EXR_COMPRESSION_B44 || comp == EXR_COMPRESSION_B44A;
+	job.zip = comp == EXR_COMPRESSION_ZIP || comp == EXR_COMPRESSION_ZIPS;
 	if (rv == EXR_ERR_SUCCESS && job.tiled) {
 		/* Level 0 only: mip/rip levels below it are not needed. */
 		int32_t lw = 0, lh = 0;
@@ -1292,6 +1355,77 @@ static exr_result_t copy_attribute(exr_context_t c, int part,
 	}
 }
 
+/* ZIP and ZIPS chunks are deflated by libdeflate: several times faster
+ * than the zlib that OpenEXRCore 3.1 calls (writing a 1080p frame of 46
+ * float channels took 7.8 s, 80 % of it in zlib), for the same kind of
+ * zlib stream any reader inflates. The bytes are prepared as OpenEXR's
+ * own ZIP does (apply_zip_impl): split into the even and the odd bytes,
+ * then each stored as the difference to the one before, plus 128. The
+ * slot's state travels in encoding_user_data. */
+typedef struct zip_slot {
+	struct libdeflate_compressor *deflate;
+	uint8_t *scratch;
+	size_t cap;
+} zip_slot;
+
+/* Measured on make compare's head render (49 channels, 320x240): level 4
+ * writes 0.3 % more bytes than 6 in 5 % less time; on the benchmark's
+ * noisy 1080p frame 10 % less time (the level is not stored in the
+ * file; any reader inflates any level). */
+#define ZIP_LEVEL 4
+
+static void *write_alloc(size_t size);
+static void write_free(void *p);
+
+static exr_result_t zip_compress(exr_encode_pipeline_t *enc)
+{
+	zip_slot *z = enc->encoding_user_data;
+	size_t n = enc->packed_bytes;
+	if (z->cap < n) {
+		free(z->scratch);
+		z->cap = 0;
+		if (!(z->scratch = malloc(n)))
+			return EXR_ERR_OUT_OF_MEMORY;
+		z->cap = n;
+	}
+	const uint8_t *raw = enc->packed_buffer;
+	uint8_t *even = z->scratch, *odd = z->scratch + (n + 1) / 2;
+	for (size_t i = 0; i + 1 < n; i += 2) {
+		*even++ = raw[i];
+		*odd++ = raw[i + 1];
+	}
+	if (n % 2)
+		*even = raw[n - 1];
+	uint8_t *t = z->scratch;
+	int prev = t[0];
+	for (size_t i = 1; i < n; i++) {
+		int d = (int)t[i] - prev + (128 + 256);
+		prev = t[i];
+		t[i] = (uint8_t)d;
+	}
+	/* The pipeline frees this buffer with the context's free function,
+	 * which is write_free. */
+	size_t bound = libdeflate_zlib_compress_bound(z->deflate, n);
+	if (!enc->compressed_buffer || enc->compressed_alloc_size < bound) {
+		if (enc->compressed_buffer &&
+		    enc->compressed_buffer != enc->packed_buffer)
+			write_free(enc->compressed_buffer);
+		enc->compressed_alloc_size = 0;
+		if (!(enc->compressed_buffer = write_alloc(bound)))
+			return EXR_ERR_OUT_OF_MEMORY;
+		enc->compressed_alloc_size = bound;
+	}
+	size_t out = libdeflate_zlib_compress(z->deflate, z->scratch, n,
+	                                      enc->compressed_buffer,
+	                                      enc->compressed_alloc_size);
+	if (out == 0 || out > n) { /* stored raw, as OpenEXR does */
+		memcpy(enc->compressed_buffer, enc->packed_buffer, n);
+		out = n;
+	}
+	enc->compressed_bytes = out;
+	return EXR_ERR_SUCCESS;
+}
+
 /* Chunk encoding: a round of up to `slots` chunks is packed and
  * compressed in parallel (one pipeline per slot, kept across rounds),
  * then written in scanline order by the calling thread, since an
@@ -1305,6 +1439,7 @@ typedef struct write_job {
 	exr_encode_pipeline_t *pipe; /* per slot */
 	uint8_t *started;            /* per slot */
 	exr_result_t *rv;            /* per slot, this round */
+	zip_slot *zip;               /* per slot; NULL unless ZIP or ZIPS */
 	int32_t first;               /* chunk of slot 0 in this round */
 } write_job;
 
@@ -1370,9 +1505,14 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 			ch->user_bytes_per_element = (int16_t)sizeof(float);
 			ch->user_data_type = EXR_PIXEL_FLOAT;
 		}
-		if (rv == EXR_ERR_SUCCESS && !job->started[s])
+		if (rv == EXR_ERR_SUCCESS && !job->started[s]) {
 			rv = exr_encoding_choose_default_routines(job->ctxt, job->part,
 			                                          enc);
+			if (job->zip) {
+				enc->compress_fn = zip_compress;
+				enc->encoding_user_data = &job->zip[s];
+			}
+		}
 		job->started[s] = 1;
 		/* Pack and compress only; the caller writes, in order. */
 		enc->yield_until_ready_fn = NULL;
@@ -1411,6 +1551,16 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 	job.rv = calloc((size_t)slots, sizeof *job.rv);
 	if (!ref || !info || !job.pipe || !job.started || !job.rv)
 		rv = EXR_ERR_OUT_OF_MEMORY;
+	if (rv == EXR_ERR_SUCCESS && (o->compression == SSS_EXR_ZIP ||
+	                              o->compression == SSS_EXR_ZIPS)) {
+		job.zip = calloc((size_t)slots, sizeof *job.zip);
+		for (int32_t s = 0; job.zip && s < slots; s++)
+			if (!(job.zip[s].deflate =
+			      libdeflate_alloc_compressor(ZIP_LEVEL)))
+				rv = EXR_ERR_OUT_OF_MEMORY;
+		if (!job.zip)
+			rv = EXR_ERR_OUT_OF_MEMORY;
+	}
 
 	/* The library sorted the channel list; find each one's pass. */
 	for (int i = 0; rv == EXR_ERR_SUCCESS && i < cl->num_channels; i++) {
@@ -1460,6 +1610,11 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 	for (int32_t s = 0; job.started && s < slots; s++)
 		if (job.started[s])
 			exr_encoding_destroy(c, &job.pipe[s]);
+	for (int32_t s = 0; job.zip && s < slots; s++) {
+		libdeflate_free_compressor(job.zip[s].deflate);
+		free(job.zip[s].scratch);
+	}
+	free(job.zip);
 	free(job.pipe);
 	free(job.started);
 	free(job.rv);

@@ -9,7 +9,7 @@ set -u
 # Mesa's software OpenGL. make bench times oiiotool (openimageio-tools).
 # python3-venv: the virtual environments for Blender 4.5 and 5.0 (bpy).
 PACKAGES="gcc make libc6-dev pkg-config binutils libpng-dev libopenexr-dev
-libcjson-dev blender python3 python3-venv python3-numpy python3-pytest python3-openimageio
+libcjson-dev libdeflate-dev blender python3 python3-venv python3-numpy python3-pytest python3-openimageio
 valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri openimageio-tools"
 missing=""
 for p in $PACKAGES; do
