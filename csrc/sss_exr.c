@@ -631,6 +631,20 @@ static exr_result_t raw_chunk(exr_decode_pipeline_t *dec)
 
 /* Decodes chunks [c0, c1) with one pipeline; every channel goes straight
  * to its place in its pass (interleaved), halves and uints converted. */
+/* *buf holds at least n bytes (its contents are not kept); 0 when out of
+ * memory, with *buf freed and *cap 0. */
+static int grow(uint8_t **buf, size_t *cap, size_t n)
+{
+	if (*cap >= n)
+		return 1;
+	free(*buf);
+	*cap = 0;
+	if (!(*buf = malloc(n)))
+		return 0;
+	*cap = n;
+	return 1;
+}
+
 /* ZIP and ZIPS chunks are inflated by libdeflate (about twice as fast as
  * the zlib OpenEXRCore 3.1 calls), then OpenEXR's byte preparation is
  * undone as its undo_zip_impl does: each byte is the one before plus the
@@ -655,13 +669,8 @@ static exr_result_t zip_decompress(exr_decode_pipeline_t *dec)
 	}
 	if (n == 0 || !out)
 		return EXR_ERR_CORRUPT_CHUNK;
-	if (z->cap < n) {
-		free(z->scratch);
-		z->cap = 0;
-		if (!(z->scratch = malloc(n)))
-			return EXR_ERR_OUT_OF_MEMORY;
-		z->cap = n;
-	}
+	if (!grow(&z->scratch, &z->cap, n))
+		return EXR_ERR_OUT_OF_MEMORY;
 	size_t in_used = 0, got = 0;
 	if (libdeflate_zlib_decompress_ex(z->inflate, dec->packed_buffer, packed,
 	                                  z->scratch, n, &in_used, &got) !=
@@ -1381,13 +1390,8 @@ static exr_result_t zip_compress(exr_encode_pipeline_t *enc)
 {
 	zip_slot *z = enc->encoding_user_data;
 	size_t n = enc->packed_bytes;
-	if (z->cap < n) {
-		free(z->scratch);
-		z->cap = 0;
-		if (!(z->scratch = malloc(n)))
-			return EXR_ERR_OUT_OF_MEMORY;
-		z->cap = n;
-	}
+	if (!grow(&z->scratch, &z->cap, n))
+		return EXR_ERR_OUT_OF_MEMORY;
 	const uint8_t *raw = enc->packed_buffer;
 	uint8_t *even = z->scratch, *odd = z->scratch + (n + 1) / 2;
 	for (size_t i = 0; i + 1 < n; i += 2) {

@@ -27,6 +27,20 @@ def load_addon():
     return separable_sss
 
 
+def registered(addon):
+    """A module-scoped autouse fixture (assign it to a name in the test
+    module): the add-on registered for the module's tests, unregistered
+    after them."""
+    import pytest
+
+    @pytest.fixture(scope="module", autouse=True)
+    def fixture():
+        addon.register()
+        yield
+        addon.unregister()
+    return fixture
+
+
 def build_blend(kind, path, size=96, samples=8):
     """A scene from blender_scripts/build_scene.py, in its own process so
     this one's data is untouched."""

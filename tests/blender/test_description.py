@@ -7,18 +7,14 @@ import json
 import bpy
 import pytest
 
-from helpers import build_blend, load_addon
+from helpers import build_blend, load_addon, registered
 
 separable_sss = load_addon()
 from separable_sss import (analysis, description, native,  # noqa: E402
                            pipeline, properties, transmission)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def addon():
-    separable_sss.register()
-    yield
-    separable_sss.unregister()
+addon = registered(separable_sss)
 
 
 @pytest.fixture(scope="module")

@@ -7,18 +7,14 @@ import os
 import bpy
 import pytest
 
-from helpers import build_blend, compat, load_addon
+from helpers import build_blend, compat, load_addon, registered
 
 separable_sss = load_addon()
 from separable_sss import native, nodes, pipeline, transmission  # noqa: E402,E501
 from separable_sss.properties import method_items  # noqa: E402
 
 
-@pytest.fixture(scope="module", autouse=True)
-def addon():
-    separable_sss.register()
-    yield
-    separable_sss.unregister()
+addon = registered(separable_sss)
 
 
 @pytest.fixture(scope="module")
