@@ -629,8 +629,6 @@ static exr_result_t raw_chunk(exr_decode_pipeline_t *dec)
 	return EXR_ERR_SUCCESS;
 }
 
-/* Decodes chunks [c0, c1) with one pipeline; every channel goes straight
- * to its place in its pass (interleaved), halves and uints converted. */
 /* *buf holds at least n bytes (its contents are not kept); 0 when out of
  * memory, with *buf freed and *cap 0. */
 static int grow(uint8_t **buf, size_t *cap, size_t n)
@@ -645,11 +643,9 @@ static int grow(uint8_t **buf, size_t *cap, size_t n)
 	return 1;
 }
 
-/* ZIP and ZIPS chunks are inflated by libdeflate (about twice as fast as
- * the zlib OpenEXRCore 3.1 calls), then OpenEXR's byte preparation is
- * undone as its undo_zip_impl does: each byte is the one before plus the
- * stored difference less 128, and the two halves are interleaved back.
- * A chunk stored raw (as long as its pixels) is used as it is. */
+/* ZIP and ZIPS chunks are inflated by libdeflate (sss_zip.c); the
+ * pipeline's decoding_user_data is the band's unzip_state. A chunk stored
+ * raw (as long as its pixels) is used as it is. */
 typedef struct unzip_state {
 	struct libdeflate_decompressor *inflate;
 	uint8_t *scratch;
@@ -661,34 +657,22 @@ static exr_result_t zip_decompress(exr_decode_pipeline_t *dec)
 	unzip_state *z = dec->decoding_user_data;
 	size_t n = (size_t)dec->chunk.unpacked_size;
 	size_t packed = (size_t)dec->chunk.packed_size;
-	uint8_t *out = dec->unpacked_buffer;
 	if (packed == n) {
 		if (dec->unpacked_buffer != dec->packed_buffer)
-			memcpy(out, dec->packed_buffer, n);
+			memcpy(dec->unpacked_buffer, dec->packed_buffer, n);
 		return EXR_ERR_SUCCESS;
 	}
-	if (n == 0 || !out)
+	if (!dec->unpacked_buffer)
 		return EXR_ERR_CORRUPT_CHUNK;
 	if (!grow(&z->scratch, &z->cap, n))
 		return EXR_ERR_OUT_OF_MEMORY;
-	size_t in_used = 0, got = 0;
-	if (libdeflate_zlib_decompress_ex(z->inflate, dec->packed_buffer, packed,
-	                                  z->scratch, n, &in_used, &got) !=
-	        LIBDEFLATE_SUCCESS || got != n)
-		return EXR_ERR_CORRUPT_CHUNK;
-	uint8_t *t = z->scratch;
-	for (size_t i = 1; i < n; i++)
-		t[i] = (uint8_t)(t[i - 1] + t[i] - 128);
-	const uint8_t *even = t, *odd = t + (n + 1) / 2;
-	for (size_t i = 0; i + 1 < n; i += 2) {
-		out[i] = *even++;
-		out[i + 1] = *odd++;
-	}
-	if (n % 2)
-		out[n - 1] = *even;
-	return EXR_ERR_SUCCESS;
+	return sss__zip_inflate(z->inflate, dec->packed_buffer, packed,
+	                        z->scratch, dec->unpacked_buffer, n)
+	       ? EXR_ERR_SUCCESS : EXR_ERR_CORRUPT_CHUNK;
 }
 
+/* Decodes chunks [c0, c1) with one pipeline; every channel goes straight
+ * to its place in its pass (interleaved), halves and uints converted. */
 static void decode_chunks(void *arg, int32_t c0, int32_t c1)
 {
 	read_job *job = arg;
@@ -1364,13 +1348,8 @@ static exr_result_t copy_attribute(exr_context_t c, int part,
 	}
 }
 
-/* ZIP and ZIPS chunks are deflated by libdeflate: several times faster
- * than the zlib that OpenEXRCore 3.1 calls (writing a 1080p frame of 46
- * float channels took 7.8 s, 80 % of it in zlib), for the same kind of
- * zlib stream any reader inflates. The bytes are prepared as OpenEXR's
- * own ZIP does (apply_zip_impl): split into the even and the odd bytes,
- * then each stored as the difference to the one before, plus 128. The
- * slot's state travels in encoding_user_data. */
+/* ZIP and ZIPS chunks are deflated by libdeflate (sss_zip.c); the slot's
+ * zip_slot travels in encoding_user_data. */
 typedef struct zip_slot {
 	struct libdeflate_compressor *deflate;
 	uint8_t *scratch;
@@ -1392,21 +1371,6 @@ static exr_result_t zip_compress(exr_encode_pipeline_t *enc)
 	size_t n = enc->packed_bytes;
 	if (!grow(&z->scratch, &z->cap, n))
 		return EXR_ERR_OUT_OF_MEMORY;
-	const uint8_t *raw = enc->packed_buffer;
-	uint8_t *even = z->scratch, *odd = z->scratch + (n + 1) / 2;
-	for (size_t i = 0; i + 1 < n; i += 2) {
-		*even++ = raw[i];
-		*odd++ = raw[i + 1];
-	}
-	if (n % 2)
-		*even = raw[n - 1];
-	uint8_t *t = z->scratch;
-	int prev = t[0];
-	for (size_t i = 1; i < n; i++) {
-		int d = (int)t[i] - prev + (128 + 256);
-		prev = t[i];
-		t[i] = (uint8_t)d;
-	}
 	/* The pipeline frees this buffer with the context's free function,
 	 * which is write_free. */
 	size_t bound = libdeflate_zlib_compress_bound(z->deflate, n);
@@ -1419,14 +1383,9 @@ static exr_result_t zip_compress(exr_encode_pipeline_t *enc)
 			return EXR_ERR_OUT_OF_MEMORY;
 		enc->compressed_alloc_size = bound;
 	}
-	size_t out = libdeflate_zlib_compress(z->deflate, z->scratch, n,
-	                                      enc->compressed_buffer,
-	                                      enc->compressed_alloc_size);
-	if (out == 0 || out > n) { /* stored raw, as OpenEXR does */
-		memcpy(enc->compressed_buffer, enc->packed_buffer, n);
-		out = n;
-	}
-	enc->compressed_bytes = out;
+	enc->compressed_bytes = sss__zip_deflate(z->deflate, enc->packed_buffer,
+	                                         n, z->scratch,
+	                                         enc->compressed_buffer, bound);
 	return EXR_ERR_SUCCESS;
 }
 

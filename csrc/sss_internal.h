@@ -194,6 +194,21 @@ static inline void sss__span(const sss_image *im, const char **lo,
 const char *sss__exr_path(const sss_exr *exr);
 int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix);
 
+/* sss_zip.c: one chunk in OpenEXR's ZIP format through libdeflate.
+ * Deflating writes at most out_cap bytes (libdeflate_zlib_compress_bound
+ * of n) and returns how many: n when the chunk is stored raw (a copy of
+ * raw), as OpenEXR stores what does not compress. Inflating fills out
+ * with exactly n bytes, or returns 0 (a corrupt chunk). scratch holds n
+ * bytes. */
+struct libdeflate_compressor;
+struct libdeflate_decompressor;
+size_t sss__zip_deflate(struct libdeflate_compressor *deflate,
+                        const uint8_t *raw, size_t n, uint8_t *scratch,
+                        uint8_t *out, size_t out_cap);
+int sss__zip_inflate(struct libdeflate_decompressor *inflate,
+                     const uint8_t *in, size_t in_n, uint8_t *scratch,
+                     uint8_t *out, size_t n);
+
 /* Checks one pass view against the frame size w x h (sss_apply.c);
  * absent passes (data == NULL) are fine unless required. Errors name the
  * pass. */

@@ -253,14 +253,18 @@ def burley_d(material):
                     material, 1)
 
 
+def _metres(fn, material):
+    """fn(row, double *) for one material: the double."""
+    metres = ctypes.c_double()
+    with _material(material) as row:
+        _check(fn(row, ctypes.byref(metres)), None)
+    return metres.value
+
+
 def material_support(material):
     """Metres beyond which the material's profile is treated as 0, before
     the scene's radius scale."""
-    metres = ctypes.c_double()
-    with _material(material) as row:
-        _check(library().sss_material_support(row, ctypes.byref(metres)),
-               None)
-    return metres.value
+    return _metres(library().sss_material_support, material)
 
 
 def transmittance(material, thickness_metres, facing=1.0):
@@ -273,11 +277,7 @@ def transmittance(material, thickness_metres, facing=1.0):
 def transmission_reach(material):
     """Metres of thickness beyond which the material lets (almost) nothing
     through; 0 when it does not transmit."""
-    metres = ctypes.c_double()
-    with _material(material) as row:
-        _check(library().sss_transmission_reach(row, ctypes.byref(metres)),
-               None)
-    return metres.value
+    return _metres(library().sss_transmission_reach, material)
 
 
 def transmission_slab(material):

@@ -13,6 +13,7 @@ from bpy.app.handlers import persistent
 from bpy.props import BoolProperty
 
 from . import nodes, pipeline, render_flow
+from .switch_off import REQUIRED_PASSES
 
 # Only one run at a time: its worker thread, alive while the library runs
 # (also after an Esc, until the library returns).
@@ -67,18 +68,13 @@ def _poll_common(cls, context):
     return True
 
 
-# The passes a render needs for Apply SSS to Last Render (Render with SSS
-# turns them on for its own render).
-APPLY_PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color", "z",
-                "material_index")
-
-
 def _missing_passes(layer):
-    """The names of APPLY_PASSES the view layer does not render."""
+    """The names of the passes the library needs that the view layer does
+    not render (Render with SSS turns them on for its own render)."""
     if layer is None:
         return []
     return [layer.bl_rna.properties["use_pass_" + p].name
-            for p in APPLY_PASSES if not getattr(layer, "use_pass_" + p)]
+            for p in REQUIRED_PASSES if not getattr(layer, "use_pass_" + p)]
 
 
 # Per scene name, what its last render lacked (the Render Result keeps no

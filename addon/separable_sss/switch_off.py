@@ -19,9 +19,12 @@ from . import blender_compat as compat
 from . import transmission
 from .blender_compat import principled_input
 
-PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
-          "glossy_direct", "glossy_indirect", "glossy_color", "z",
-          "material_index")
+# What the library cannot do without (Apply SSS to Last Render checks that
+# a render had them), then what every render with SSS also asks for.
+REQUIRED_PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
+                   "z", "material_index")
+PASSES = REQUIRED_PASSES + ("glossy_direct", "glossy_indirect",
+                            "glossy_color")
 OPTIONAL_PASSES = {"emit": "emits", "environment": None,
                    "transmission_direct": "transmits",
                    "transmission_indirect": "transmits",
