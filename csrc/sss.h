@@ -422,7 +422,10 @@ SSS_API size_t sss_struct_size(const char *struct_name);
  * out_combined: RGB or RGBA (alpha from passes->combined, else 1), may be
  * NULL if only the light is wanted. out_diffuse_light: RGB, optional: the
  * scattered diffuse light, so that contribution = light * DiffCol.
- * Outputs must have the passes' size and must not alias any input.
+ * Outputs must have the passes' size and must not alias any input. A
+ * packed output (row_stride 0 or width x channels) also serves as
+ * working memory during the call, which saves a third of the memory: if
+ * the call fails, its contents are unspecified.
  * errbuf (optional) receives a sentence naming the bad pass or field. */
 SSS_API sss_result sss_apply(const sss_passes *passes, const sss_camera *cam,
                              const sss_material *materials,

@@ -65,6 +65,20 @@ static sss_result check_output(const char *name, const sss_image *out,
 	return SSS_OK;
 }
 
+/* The first output whose floats are packed (no row padding, which may
+ * belong to a larger image): 3 floats a pixel of working memory, free
+ * until the recombination writes it. NULL if neither is. */
+static float *packed_output(const sss_image *a, const sss_image *b)
+{
+	const sss_image *outs[] = {a, b};
+	for (int k = 0; k < 2; k++)
+		if (outs[k] && outs[k]->channels >= 3 &&
+		    sss__stride(outs[k]) == (int64_t)outs[k]->width *
+		                            outs[k]->channels)
+			return outs[k]->data;
+	return NULL;
+}
+
 static sss_result check_options(const sss_options *o, char *errbuf,
                                 size_t errbuf_len)
 {
@@ -134,6 +148,7 @@ typedef struct rows_ctx {
 	double background_depth;
 	int32_t w;
 	float *signal;
+	int64_t signal_px, signal_ch; /* layout, as in sss__job */
 	int16_t *slot;
 	const sss_image *out_combined, *out_diffuse_light;
 } rows_ctx;
@@ -147,19 +162,12 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss__kernel *kernels = ctx->kernels;
 	const int16_t *by_index = ctx->by_index;
 	const sss__transmission *transmission = ctx->transmission;
-	float *signal = ctx->signal;
 	int16_t *slot = ctx->slot;
 	int32_t w = ctx->w;
 	for (int32_t y = y0; y < y1; y++) {
 		for (int32_t x = 0; x < w; x++) {
 			size_t i = (size_t)y * w + x;
-			float *s = signal + 3 * i;
-			const float *dd = sss__at(&p->diff_dir, x, y);
-			const float *di = p->diff_ind.data ? sss__at(&p->diff_ind, x, y)
-			                                   : NULL;
-			for (int c = 0; c < 3; c++)
-				s[c] = di ? dd[c] + di[c] : dd[c];
-
+			float *out = ctx->signal + (int64_t)i * ctx->signal_px;
 			float index = sss__at(&p->index_ma, x, y)[0];
 			float z = sss__at(&p->depth, x, y)[0];
 			int16_t k = -1;
@@ -170,17 +178,32 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 			if (k >= 0 && p->position.data &&
 			    !sss__isfinite3(sss__at(&p->position, x, y)))
 				k = -1;
-			if (k >= 0 && transmission) /* back-lit light, before the blur */
+			if (k < 0) {
+				/* 0: the methods weigh other pixels by 0, and 0 x a
+				 * non-finite light would spoil the sum */
+				slot[i] = -1;
+				for (int c = 0; c < 3; c++)
+					out[c * ctx->signal_ch] = 0.0f;
+				continue;
+			}
+			float s[3];
+			const float *dd = sss__at(&p->diff_dir, x, y);
+			const float *di = p->diff_ind.data ? sss__at(&p->diff_ind, x, y)
+			                                   : NULL;
+			for (int c = 0; c < 3; c++)
+				s[c] = di ? dd[c] + di[c] : dd[c];
+			if (transmission) /* back-lit light, before the blur */
 				sss__transmission_add(transmission, k, x, y, s);
-			if (k >= 0 && kernels[k].texturing ==
-			              SSS_TEXTURING_PRE_AND_POST) {
+			if (kernels[k].texturing == SSS_TEXTURING_PRE_AND_POST) {
 				const float *col = sss__at(&p->diff_col, x, y);
 				for (int c = 0; c < 3; c++)
 					s[c] *= sqrtf(fmaxf(col[c], 0.0f));
 			}
-			if (k >= 0 && !sss__isfinite3(s))
+			if (!sss__isfinite3(s))
 				k = -1;
 			slot[i] = k;
+			for (int c = 0; c < 3; c++)
+				out[c * ctx->signal_ch] = k >= 0 ? s[c] : 0.0f;
 		}
 	}
 }
@@ -192,7 +215,6 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss_passes *p = ctx->p;
 	const sss_material *materials = ctx->materials;
 	const sss__kernel *kernels = ctx->kernels;
-	const float *signal = ctx->signal;
 	const int16_t *slot = ctx->slot;
 	const sss_image *out_combined = ctx->out_combined;
 	const sss_image *out_diffuse_light = ctx->out_diffuse_light;
@@ -208,7 +230,8 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 			for (int c = 0; c < 3; c++) {
 				float l = di ? dd[c] + di[c] : dd[c];
 				if (slot[i] >= 0 && kernels[slot[i]].mix[c] > 0.0f) {
-					l = signal[3 * i + c];
+					l = ctx->signal[(int64_t)i * ctx->signal_px +
+					                c * ctx->signal_ch];
 					if (kernels[slot[i]].texturing ==
 					    SSS_TEXTURING_PRE_AND_POST) {
 						float root = sqrtf(fmaxf(col[c], 0.0f));
@@ -335,7 +358,10 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	int16_t *by_index = malloc(65536 * sizeof *by_index);
 	int16_t *slot = malloc(npix * sizeof *slot);
 	float *signal = malloc(npix * 3 * sizeof *signal);
-	float *scratch = malloc(npix * 3 * sizeof *scratch);
+	float *scratch = packed_output(out_combined, out_diffuse_light);
+	float *own_scratch = NULL;
+	if (!scratch)
+		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
 	                        sizeof *zrange);
 	if (!kernels || !by_index || !slot || !signal || !scratch || !zrange) {
@@ -388,12 +414,15 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		.position_stride = p->position.data ? sss__stride(&p->position) : 0,
 		.position_channels = p->position.channels,
 		.proj = proj, .max_support_px = opt.max_support_px,
-		.signal = signal, .scratch = scratch,
+		.signal = signal, .signal_px = 3, .signal_ch = 1,
+		.scratch = scratch,
 	};
+	if (opt.method == SSS_METHOD_SEPARABLE) /* reads colour planes */
+		job.signal_px = 1, job.signal_ch = (int64_t)npix;
 
 	rows_ctx rc = {p, materials, kernels, by_index, transmission,
-	               opt.background_depth, w, signal, slot, out_combined,
-	               out_diffuse_light};
+	               opt.background_depth, w, signal, job.signal_px,
+	               job.signal_ch, slot, out_combined, out_diffuse_light};
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
 
 	if (material_count > 0) {
@@ -420,7 +449,7 @@ done:
 	free(by_index);
 	free(slot);
 	free(signal);
-	free(scratch);
+	free(own_scratch);
 	free(zrange);
 	return r;
 }

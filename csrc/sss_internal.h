@@ -47,8 +47,15 @@ typedef struct sss__job {
 	int32_t position_channels;
 	sss__projection proj;
 	int32_t max_support_px;
-	float *signal;          /* RGB, packed: the light to scatter */
-	float *scratch;         /* RGB, packed: the horizontal pass */
+	/* The light to scatter, RGB: component c of pixel i at
+	 * signal[i * signal_px + c * signal_ch], packed (3, 1) or, for the
+	 * separable method, planar (1, width * height). */
+	float *signal;
+	int64_t signal_px, signal_ch;
+	/* 3 x width x height floats of working memory: the caller's output
+	 * when it is packed (nothing in it is read before the recombination
+	 * overwrites it), else allocated. */
+	float *scratch;
 } sss__job;
 
 /* "a directory", "a FIFO (named pipe)", ...: what a stat mode names, for

@@ -396,8 +396,6 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 				int16_t slot = job->slot[i];
 				if (slot < 0)
 					continue;
-				for (int c = 0; c < 3; c++)
-					in->rgb[c][i] = job->signal[3 * i + c];
 				if (in->z != job->depth)
 					in->z[i] = job->depth[y * job->depth_stride +
 					                      (int64_t)x * job->depth_channels];
@@ -432,9 +430,22 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 	for (int32_t rb = r0; rb < r1; rb += BLOCK) {
 		int32_t re = rb + BLOCK < r1 ? rb + BLOCK : r1;
 		sss__blur1d tpl[BLOCK];
-		for (int32_t r = rb; r < re; r++)
+		/* Only the span where the block's rows scatter: a sequential
+		 * scan here, so that the strided walk below (and the work)
+		 * follows the coverage. */
+		int32_t first = len, last = -1;
+		for (int32_t r = rb; r < re; r++) {
 			row_template(ctx, r, &tpl[r - rb]);
-		for (int32_t pos = 0; pos < len; pos++)
+			const int16_t *sl = in->slot + (size_t)r * len;
+			int32_t a = 0, b = len - 1;
+			while (a < first && sl[a] < 0)
+				a++;
+			while (b > last && sl[b] < 0)
+				b--;
+			first = a < first ? a : first;
+			last = b > last ? b : last;
+		}
+		for (int32_t pos = first; pos <= last; pos++)
 			for (int32_t r = rb; r < re; r++) {
 				size_t i = (size_t)r * len + pos, o = (size_t)pos * rows + r;
 				int16_t slot = in->slot[i];
@@ -447,9 +458,16 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 				if (ctx->first)
 					for (int c = 0; c < 3; c++)
 						ctx->out.rgb[c][o] = b[c];
-				else
-					sss__blend_pixel(&job->kernels[slot], b,
-					                 job->signal + 3 * o);
+				else {
+					/* back into the light's planes, in place:
+					 * this pass's pixel is at o in image order */
+					float v[3];
+					for (int c = 0; c < 3; c++)
+						v[c] = ctx->out.rgb[c][o];
+					sss__blend_pixel(&job->kernels[slot], b, v);
+					for (int c = 0; c < 3; c++)
+						ctx->out.rgb[c][o] = v[c];
+				}
 			}
 	}
 	free(mem);
@@ -550,32 +568,33 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	sss_result r = SSS_ERR_OUT_OF_MEMORY;
 	int geo = job->position != NULL;
 	int copy_z = !(job->depth_channels == 1 && job->depth_stride == w);
-	/* Both planes start as zeros (calloc: pages nobody touches cost
-	 * nothing) and only scattering pixels are written: the work and the
-	 * memory follow the coverage. A sample on another material is masked
-	 * off, but must be finite: 0 is. */
+	/* The light's planes are the job's signal (planar for this method,
+	 * 0 where nothing scatters); the rest starts as zeros (calloc: pages
+	 * nobody touches cost nothing) and only scattering pixels are
+	 * written: the work and the memory follow the coverage. A sample on
+	 * another material is masked off, but must be finite: 0 is. */
 	table *tables = calloc((size_t)count, sizeof *tables);
 	plane hp = {w, h, {NULL}, NULL, {NULL}, NULL};
 	plane vp = {h, w, {NULL}, NULL, {NULL}, NULL};
-	size_t hn = 3 + (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 4 : 1;
-	float *hbuf = calloc(npix * hn, sizeof *hbuf);
+	size_t hn = (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 4 : 1;
+	float *hbuf = hn ? calloc(npix * hn, sizeof *hbuf) : NULL;
 	float *vbuf = calloc(npix * vn, sizeof *vbuf);
 	int16_t *vslot = malloc(npix * sizeof *vslot);
-	if (!tables || !hbuf || !vbuf || !vslot)
+	if (!tables || (hn && !hbuf) || !vbuf || !vslot)
 		goto done;
 	/* The transposed light lives in the job's scratch image (fill_rows
 	 * clears it). */
 	for (int c = 0; c < 3; c++) {
-		hp.rgb[c] = hbuf + c * npix;
+		hp.rgb[c] = job->signal + c * npix;
 		vp.rgb[c] = job->scratch + c * npix;
 	}
 	vp.z = vbuf;
 	vp.slot = vslot;
 	hp.slot = (int16_t *)job->slot;
-	hp.z = copy_z ? hbuf + 3 * npix : (float *)job->depth;
+	hp.z = copy_z ? hbuf : (float *)job->depth;
 	if (geo)
 		for (int c = 0; c < 3; c++) {
-			hp.geo[c] = hbuf + (3 + (size_t)copy_z + c) * npix;
+			hp.geo[c] = hbuf + ((size_t)copy_z + c) * npix;
 			vp.geo[c] = vbuf + (1 + c) * npix;
 		}
 
