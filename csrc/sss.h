@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 6
+#define SSS_ABI_VERSION 7
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -304,6 +304,14 @@ typedef struct sss_material {
 	float transmission_scale;        /* >= 0 (1): fast */
 	float transmission_ambient;      /* >= 0 (0): fast */
 	float thickness_scale;           /* >= 0 (1): multiplies the pass */
+	float transmission_baked_scale;  /* >= 0 (0: not baked): the back
+	                                    light already holds the slab's
+	                                    T(t) / T(0) for sss_options.
+	                                    radius_scale = this (the add-on's
+	                                    slab override, Thickness 0): T(0)
+	                                    is applied, and any other
+	                                    radius_scale but 0 is refused, as
+	                                    T(t) could not follow it */
 
 	/* Energy calibration (sss_calibration; all kinds; NONE by default).
 	 * The gain is 1 + strength (g - 1), so strength 0 stays the

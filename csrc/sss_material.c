@@ -138,6 +138,9 @@ static sss_result check_transmission(const sss_material *mat, char *errbuf,
 	if (!in_range(mat->thickness_scale, 0.0f, 1e30f))
 		return FAIL("material %d: thickness_scale %g must be >= 0", idx,
 		            (double)mat->thickness_scale);
+	if (!in_range(mat->transmission_baked_scale, 0.0f, 1e30f))
+		return FAIL("material %d: transmission_baked_scale %g must be >= "
+		            "0", idx, (double)mat->transmission_baked_scale);
 	return SSS_OK;
 }
 

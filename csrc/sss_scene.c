@@ -526,6 +526,8 @@ static const field material_fields[] = {
 	 .range = NONNEG_F},
 	{MAT("transmission_ambient", ALL, FIELD_F32, transmission_ambient),
 	 .range = NONNEG_F},
+	{MAT("transmission_baked_scale", ALL, FIELD_F32,
+	     transmission_baked_scale), .range = NONNEG_F},
 	{MAT("thickness_scale", ALL, FIELD_F32, thickness_scale),
 	 .range = NONNEG_F},
 	{MAT("calibration", ALL, FIELD_ENUM, calibration),

@@ -471,6 +471,25 @@ sss_result sss__transmission_prepare(const sss_passes *p,
 		return sss__fail(errbuf, errbuf_len, SSS_ERR_MISSING_PASS,
 		                 "pass Thickness is required with BackDir: material "
 		                 "%d transmits", materials[first].pass_index);
+	/* A baked back light crossed the part at the radius scale it was
+	 * rendered for: another scale would leave that light as it is (T(0)
+	 * does not depend on the scale), so the combination is refused. 0
+	 * turns scattering and transmission off, which is exact. */
+	for (int32_t m = 0; m < count; m++) {
+		float baked = materials[m].transmission_baked_scale;
+		if (baked > 0.0f &&
+		    materials[m].transmission != SSS_TRANSMISSION_OFF &&
+		    materials[m].kind != SSS_PROFILE_NONE &&
+		    opt->radius_scale != baked && opt->radius_scale != 0.0f)
+			return sss__fail(errbuf, errbuf_len,
+			                 SSS_ERR_INVALID_ARGUMENT, "radius_scale %g: "
+			                 "material %d's back light crossed it at radius "
+			                 "scale %g (transmission_baked_scale), which "
+			                 "another scale cannot change: render it again "
+			                 "at the new radius, or use 0 (no scattering)",
+			                 (double)opt->radius_scale,
+			                 materials[m].pass_index, (double)baked);
+	}
 
 	sss__transmission *t = calloc(1, sizeof *t);
 	tmat *mats = t ? calloc((size_t)count, sizeof *mats) : NULL;

@@ -546,6 +546,44 @@ static void test_validation(void)
 	             run(&S, &m, 1, err, sizeof err));
 }
 
+/* A back light whose attenuation the add-on baked at one radius scale
+ * (transmission_baked_scale): that scale and 0 (no scattering, exactly
+ * the plain light) run; any other is refused, naming the field, since
+ * T(0) would leave the baked light as it is. */
+static void test_baked_scale(void)
+{
+	char err[256];
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.01f);
+	m.transmission_baked_scale = 2.0f;
+	slab_make(&S, 1.0f, 0.0f);
+	CHECK_STATUS("baked.same", SSS_OK, run(&S, &m, 2.0f, err, sizeof err));
+	CHECK("baked.same.transmits", front(&S, 0) > 0.1f, "%g",
+	      (double)front(&S, 0));
+	slab_make(&S, 1.0f, 0.0f);
+	CHECK_STATUS("baked.zero", SSS_OK, run(&S, &m, 0.0f, err, sizeof err));
+	CHECK("baked.zero.plain", front(&S, 0) == 0.0f, "%g",
+	      (double)front(&S, 0));
+	float scales[] = {1.0f, 1e-9f, 2.5f};
+	for (int k = 0; k < 3; k++) {
+		slab_make(&S, 1.0f, 0.0f);
+		CHECK_STATUS("baked.other", SSS_ERR_INVALID_ARGUMENT,
+		             run(&S, &m, scales[k], err, sizeof err));
+		CHECK("baked.other.msg", strstr(err, "transmission_baked_scale") &&
+		      strstr(err, "render it again"), "%s", err);
+	}
+	/* Without back light nothing was baked into anything: runs. */
+	slab_make(&S, 1.0f, 0.0f);
+	S.p.back_dir.data = NULL;
+	S.p.thickness.data = NULL;
+	CHECK_STATUS("baked.no-back-light", SSS_OK,
+	             run(&S, &m, 0.5f, err, sizeof err));
+	m.transmission_baked_scale = -1.0f;
+	CHECK_STATUS("baked.negative", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&m, err, sizeof err));
+	CHECK("baked.negative.msg", strstr(err, "transmission_baked_scale") !=
+	      NULL, "%s", err);
+}
+
 static void test_scene_json(void)
 {
 	const char *json =
@@ -555,7 +593,7 @@ static void test_scene_json(void)
 		" \"transmission_distance\": 0.003, \"transmission_translucency\": 0.5,"
 		" \"transmission_distortion\": 0.1, \"transmission_power\": 8,"
 		" \"transmission_scale\": 2, \"transmission_ambient\": 0.1,"
-		" \"thickness_scale\": 1.5}]}";
+		" \"thickness_scale\": 1.5, \"transmission_baked_scale\": 0.5}]}";
 	sss_scene *sc = NULL;
 	char warn[256], err[256];
 	CHECK_STATUS("json.parse", SSS_OK, sss_scene_parse(json, strlen(json),
@@ -573,7 +611,8 @@ static void test_scene_json(void)
 		      m->transmission_power == 8.0f &&
 		      m->transmission_scale == 2.0f &&
 		      m->transmission_ambient == 0.1f &&
-		      m->thickness_scale == 1.5f, "fields differ");
+		      m->thickness_scale == 1.5f &&
+		      m->transmission_baked_scale == 0.5f, "fields differ");
 		CHECK("json.no-warnings", warn[0] == '\0', "%s", warn);
 		sss_scene_free(sc);
 	}
@@ -761,6 +800,7 @@ int main(void)
 	test_models();
 	test_extremes();
 	test_validation();
+	test_baked_scale();
 	test_scene_json();
 	test_process();
 	return tu_finish("test_transmission");

@@ -8,7 +8,7 @@ import json
 import os
 
 from . import blender_compat as compat
-from . import lighting
+from . import lighting, native
 
 
 def method_name(identifier):
@@ -123,8 +123,34 @@ def scene_description(scene, found):
         "radius_scale": scene.sss.radius_scale,
         "method": method_name(scene.sss.method),
         "taps": scene.sss.taps | 1,
-        "materials": [material_entry(f) for f in found.found],
+        "materials": [_with_baked(scene, f, material_entry(f))
+                      for f in found.found],
     }
+
+
+def slab(scene, found):
+    """The library's diffusion slab (sigma_tr, a, zb per channel, metres
+    at radius scale 1) when the back-light layer bakes this material's
+    attenuation into its light (transmission.py, PROP_MODE 2): the burley
+    model on a Burley profile, every channel with a medium. None
+    otherwise."""
+    s = found.material.sss
+    if lighting.model(found) != "BURLEY" or not s.thickness_scale > 0.0 \
+            or not scene.sss.radius_scale > 0.0:
+        return None
+    params = native.transmission_slab(library_material(scene, found))
+    if params is None or not all(a > 0.0 for a in params[1]):
+        return None
+    return params
+
+
+def _with_baked(scene, found, entry):
+    """The library must know which back light already crossed the part at
+    this radius scale: it refuses to scale that light's radius (sss
+    --radius-scale)."""
+    if slab(scene, found):
+        entry["transmission_baked_scale"] = scene.sss.radius_scale
+    return entry
 
 
 def write_description(scene, found, path):
