@@ -1,6 +1,7 @@
 """Which scattering materials transmit light through thin parts, and
-whether anything lights them from behind: what decides if a render needs
-the back-light layer (transmission.py). Reads the scene only."""
+what lights them from behind: with how thin their objects are
+(thickness.py), what decides if a render needs the back-light layer
+(transmission.wanted). Reads the scene only."""
 import math
 
 from mathutils import Vector
@@ -35,7 +36,8 @@ def transmitting(analysis):
     return [f for f in analysis.found if model(f) != "OFF"]
 
 
-def _objects_with(scene, material):
+def objects_with(scene, material):
+    """The rendered objects that use material."""
     for obj in scene.objects:
         if obj.hide_render or not hasattr(obj, "material_slots"):
             continue
@@ -70,45 +72,28 @@ def _world_is_bright(scene):
     return False
 
 
-def lights_behind(scene, analysis):
-    """Names of what lights a transmitting material's objects from behind
-    (lights, "World"); empty when nothing does."""
-    if scene.camera is None:
+def lights_behind(scene, objects):
+    """Names of what lights any of objects from behind (lights, "World");
+    empty when nothing does."""
+    if scene.camera is None or not objects:
         return []
     cam = scene.camera.matrix_world.translation
     names = []
     lights = [o for o in scene.objects if o.type == "LIGHT" and
               not o.hide_render and o.data.energy > 0.0]
-    for found in transmitting(analysis):
-        for obj in _objects_with(scene, found.material):
-            centre = _centre(obj)
-            to_cam = (cam - centre).normalized()
-            for light in lights:
-                if light.data.type == "SUN":
-                    to_light = (light.matrix_world.to_3x3() @
-                                Vector((0.0, 0.0, 1.0))).normalized()
-                else:
-                    to_light = (light.matrix_world.translation -
-                                centre).normalized()
-                if to_light.dot(to_cam) < BEHIND_COS and \
-                        light.name not in names:
-                    names.append(light.name)
-    if transmitting(analysis) and _world_is_bright(scene):
+    for obj in objects:
+        centre = _centre(obj)
+        to_cam = (cam - centre).normalized()
+        for light in lights:
+            if light.data.type == "SUN":
+                to_light = (light.matrix_world.to_3x3() @
+                            Vector((0.0, 0.0, 1.0))).normalized()
+            else:
+                to_light = (light.matrix_world.translation -
+                            centre).normalized()
+            if to_light.dot(to_cam) < BEHIND_COS and \
+                    light.name not in names:
+                names.append(light.name)
+    if _world_is_bright(scene):
         names.append("World")
     return names
-
-
-def wanted(scene, analysis):
-    """(bool, why): whether the render needs the back-light layer."""
-    mode = scene.sss.transmission_layer
-    mats = transmitting(analysis)
-    if not mats:
-        return False, "no scattering material has transmission on"
-    if mode == "NEVER":
-        return False, "the back-light layer is turned off"
-    if mode == "ALWAYS":
-        return True, "always on"
-    behind = lights_behind(scene, analysis)
-    if not behind:
-        return False, "no light reaches a transmitting material from behind"
-    return True, "lit from behind by " + ", ".join(behind)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from . import analysis, native, nodes, preferences
+from . import analysis, native, nodes, preferences, transmission
 from . import blender_compat as compat
 from .analysis import Analysis, Found, analyse  # noqa: F401
 from .description import (library_material, scene_description,  # noqa: F401
@@ -125,8 +125,11 @@ def prepare_render(context):
             raise SSSError("the render was cancelled; nothing was changed")
         save_passes(scene, inp)
         write_description(scene, found, desc)
-    return Job(inp, out, desc, context.view_layer.name,
-               summary=f"{len(found.found)} scattering material(s)")
+    summary = f"{len(found.found)} scattering material(s)"
+    if transmission.transmitting(found):
+        need, why = transmission.wanted(scene, found)
+        summary += f"; back-light layer {'on' if need else 'off'}, {why}"
+    return Job(inp, out, desc, context.view_layer.name, summary=summary)
 
 
 def prepare_last_render(context):

@@ -40,7 +40,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import blender_compat as compat
-from . import native, nodes, pipeline
+from . import native, nodes, pipeline, transmission
 from .switch_off import TAG, _Undo, switched_off
 
 # The render in progress, per scene name (handlers get nothing else).
@@ -240,6 +240,10 @@ class Flow:
         scene.frame_set(frame)
         copy.frame_set(frame)
         found = pipeline.analyse(scene)
+        if transmission.transmitting(found):
+            need, why = transmission.wanted(scene, found)
+            _say(scene, f"frame {frame}: back-light layer "
+                 f"{'on' if need else 'off'}, {why}")
         desc = os.path.join(self.folder, f"scene_{frame:04d}.json")
         with switched_off(copy, found):
             if os.environ.get("SSS_TEST_FAIL") == "pass":

@@ -20,15 +20,21 @@ behind, shadows included. Its override material also writes two AOVs:
 
 The layer renders at its own sample count (ViewLayer.samples, which Cycles
 honours per layer): its light is blurred afterwards, so few samples do.
-The add-on asks for it only when a scattering material transmits and a light
-can reach one of its objects from behind (or the world is bright), and
-removes it, its material and its AOVs afterwards."""
+The add-on asks for it only when it can add something visible (wanted): a
+scattering material transmits, a light reaches one of its objects from
+behind (or the world is bright), and the light can cross more than half a
+pixel of it. It removes the layer, its material and its AOVs afterwards."""
+import math
+
 import bpy
+from mathutils import Vector
 
 from . import blender_compat as compat
 from . import native
-from .description import library_material
-from .lighting import model, transmitting, wanted  # noqa: F401 (API)
+from .analysis import camera_pixels_per_metre
+from .description import library_material, slab
+from .lighting import (lights_behind, model,  # noqa: F401 (model: API)
+                       objects_with, transmitting)
 
 LAYER = "SSSBackLight"             # SSS_BACKLIGHT_LAYER in csrc/sss.h
 THICKNESS_AOV = "SSSThicknessSq"   # SSS_THICKNESS_SQ_PASS
@@ -53,6 +59,63 @@ LAYER_MAX_DEPTH = 1
 # the layer cost twice as much as 4 on the head scene, for the same
 # averaged t^2).
 AO_SAMPLES = 4
+
+# The layer is skipped when the light could cross at most this many pixels
+# of any transmitting part, however near it is: its glow would stay within
+# half a pixel of the silhouettes.
+MIN_REACH_PX = 0.5
+
+
+def _distance_to_box(obj, point):
+    """Scene units from point to obj's bounding box (0 inside it)."""
+    corners = [obj.matrix_world @ Vector(c) for c in obj.bound_box]
+    d2 = 0.0
+    for i in range(3):
+        lo = min(c[i] for c in corners)
+        hi = max(c[i] for c in corners)
+        gap = max(lo - point[i], 0.0, point[i] - hi)
+        d2 += gap * gap
+    return math.sqrt(d2)
+
+
+def wanted(scene, analysis):
+    """(bool, why): whether the render needs the back-light layer: some
+    transmitting part is lit from behind and its light can cross enough of
+    it to show (the library's reach, projected to pixels where the part is
+    nearest the camera). Thickness alone cannot rule it out: near
+    silhouettes and edges the light crosses short chords of any part
+    (measured on make compare's mixed scene, docs/transmission.md)."""
+    mode = scene.sss.transmission_layer
+    mats = transmitting(analysis)
+    if not mats:
+        return False, "no scattering material has transmission on"
+    if mode == "NEVER":
+        return False, "the back-light layer is turned off"
+    if mode == "ALWAYS":
+        return True, "always on"
+    if scene.camera is None:
+        return False, "the scene has no camera"
+    eye = scene.camera.matrix_world.translation
+    reaching, widest = [], 0.0
+    for found in mats:
+        reach = _len_metres(found, scene)
+        if not reach > 0.0:
+            continue            # lets nothing through (radius scale 0)
+        for obj in objects_with(scene, found.material):
+            distance = _distance_to_box(obj, eye)
+            px = math.inf if distance <= 0.0 else \
+                reach * camera_pixels_per_metre(scene, distance)
+            widest = max(widest, px)
+            if px >= MIN_REACH_PX:
+                reaching.append(obj)
+    if not reaching:
+        return False, (f"the light crosses at most {widest:.2g} px of a "
+                       "transmitting part")
+    behind = lights_behind(scene, reaching)
+    if not behind:
+        return False, "no light reaches a transmitting material from behind"
+    return True, "lit from behind by " + ", ".join(behind)
+
 
 def _len_metres(found, scene):
     """How thick a part can be before its transmittance is negligible
@@ -211,17 +274,14 @@ def _slab_params(scene, found):
     transmission is the library's diffusion slab (the burley model on a
     Burley profile), after its thickness scale; None otherwise (or when it
     lets nothing through or everything: thickness scale 0)."""
-    s = found.material.sss
-    k = s.thickness_scale
-    if model(found) != "BURLEY" or not k > 0.0:
-        return None
+    params = slab(scene, found)
+    if params is None:
+        return None             # not the slab, or a channel has no medium
+    k = found.material.sss.thickness_scale
     unit = scene.unit_settings.scale_length or 1.0
     length = scene.sss.radius_scale / unit
-    slab = native.transmission_slab(library_material(scene, found))
-    if slab is None or not all(a * length > 0.0 for a in slab[1]):
-        return None             # not the slab, or a channel has no medium
     out = ([], [], [])
-    for sigma, a, zb in zip(*slab):
+    for sigma, a, zb in zip(*params):
         sigma, a, zb = sigma / length, a * length, zb * length
         sigma = max(sigma, 1e-3 / a)    # keeps the shader's 0/0 away
         # T(k t) with (sigma, a, zb) is T(t) with (sigma k, a / k, zb / k)

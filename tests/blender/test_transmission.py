@@ -1,10 +1,14 @@
 """Back-lit transmission through the add-on, on a real Cycles render of a
 thin slab lit only from behind (build_scene.py --kind slab), headless."""
+import json
+import os
+import subprocess
+
 import bpy
 import numpy as np
 import pytest
 
-from helpers import build_blend, diff, load_addon, snapshot
+from helpers import BUILD, build_blend, diff, load_addon, snapshot
 
 separable_sss = load_addon()
 from separable_sss import pipeline, transmission  # noqa: E402
@@ -123,6 +127,55 @@ def test_no_layer_without_light_from_behind(slab, tmp_path):
     assert transmission.wanted(scene, pipeline.analyse(scene))[0]
     scene.sss.transmission_layer = "NEVER"
     assert not transmission.wanted(scene, pipeline.analyse(scene))[0]
+
+
+def test_no_layer_where_the_light_crosses_under_half_a_pixel(slab, tmp_path):
+    """Lit from behind, but at a radius scale where the light crosses less
+    than half a pixel of the slab: no layer, and the report says why;
+    back at scale 1 the layer returns."""
+    scene = open_scene(slab, tmp_path)
+    scene.sss.radius_scale = 1e-6
+    need, why = transmission.wanted(scene, pipeline.analyse(scene))
+    assert not need and "px of a transmitting part" in why, why
+    job = pipeline.prepare_render(bpy.context)
+    assert transmission.LAYER not in {k.split(".")[0] for k in
+                                      read_channels(job.input_exr)[0]}
+    assert "back-light layer off, the light crosses at most" in job.summary
+    scene.sss.radius_scale = 1.0
+    need, why = transmission.wanted(scene, pipeline.analyse(scene))
+    assert need, why
+
+
+def test_radius_scale_of_a_baked_back_light_is_refused(slab, tmp_path):
+    """The slab's attenuation is baked into the back light at the scene's
+    radius scale: `sss --radius-scale` cannot change it and says so
+    (before, 1e-9 gave the same glow as 1); 0 is the plain composite."""
+    scene = open_scene(slab, tmp_path)
+    scene.sss.radius_scale = 2.0
+    job = pipeline.prepare_render(bpy.context)
+    with open(job.scene_json) as f:
+        entry = json.load(f)["materials"][0]
+    assert entry["transmission_baked_scale"] == pytest.approx(2.0)
+    sss = os.path.join(BUILD, "sss")
+
+    def run(scale):
+        return subprocess.run([sss, job.input_exr, "-o",
+                               str(tmp_path / f"out_{scale}.exr"), "--scene",
+                               job.scene_json, "--radius-scale", scale],
+                              capture_output=True, text=True)
+    for scale in ("1e-9", "0.5"):
+        proc = run(scale)
+        assert proc.returncode != 0 and "transmission_baked_scale" in \
+            proc.stderr and "render it again" in proc.stderr, proc.stderr
+        assert not (tmp_path / f"out_{scale}.exr").exists()
+    assert run("1").returncode == 0
+    proc = run("0")
+    assert proc.returncode == 0, proc.stderr
+    out = read_channels(str(tmp_path / "out_0.exr"))[0]
+    inp = read_channels(job.input_exr)[0]
+    plain = rgb(inp, "ViewLayer.DiffDir") + rgb(inp, "ViewLayer.DiffInd")
+    light = rgb(out, "SSS.DiffLight")
+    assert np.abs(light - plain).max() <= 1e-6 * max(1.0, plain.max())
 
 
 def test_existing_layer_name_is_a_clear_error(slab, tmp_path):
