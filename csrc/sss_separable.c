@@ -71,8 +71,11 @@ static void tap_weights(const sss__kernel *k, double x, double below,
 		w[c] = (float)planar[c];
 		double rho = planar[c] > 0.0 ? moved[c] / planar[c] : 0.0;
 		rho = rho < 0.0 ? 0.0 : rho > 1.0 ? 1.0 : rho;
-		/* rho = (1 - off^2 a8)^8 */
-		a8[c] = (float)((1.0 - pow(rho, 0.125)) / (off * off));
+		/* rho = (1 - off^2 a8)^8; the eighth root as three square
+		 * roots (correctly rounded each: the float result is pow's,
+		 * at a tenth of its cost on pixels whose weights are made
+		 * one by one) */
+		a8[c] = (float)((1.0 - sqrt(sqrt(sqrt(rho)))) / (off * off));
 	}
 }
 
