@@ -55,7 +55,7 @@ class Bench:
 
     def run(self, tag, size=(1920, 1080), coverage=1.0, radius=16,
             method="separable", threads=0, scalar=False, repeat=2, rows=0,
-            dump=None):
+            dump=None, no_scatter=False):
         cmd = [self.exe, "--size", str(size[0]), str(size[1]),
                "--coverage", str(coverage), "--radius", str(radius),
                "--method", method, "--threads", str(threads),
@@ -66,6 +66,8 @@ class Bench:
             cmd += ["--rows", str(rows)]
         if dump:
             cmd += ["--dump", dump]
+        if no_scatter:
+            cmd.append("--no-scatter")
         out = subprocess.run(cmd, check=True, capture_output=True, text=True)
         row = dict(zip(FIELDS, next(csv.reader(io.StringIO(out.stdout)))))
         row["tag"] = tag
@@ -104,6 +106,18 @@ def grid(b):
             f"{row['ns_per_scattering_px']:8.1f} ns")
 
 
+def cpu_flags():
+    """The CPU's vector extensions, as /proc/cpuinfo names them."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((line.split(":", 1)[1].split() for line in f
+                          if line.startswith("flags")), [])
+    except OSError:
+        return "unknown"
+    wanted = [f for f in flags if f.startswith(("sse4", "avx", "fma"))]
+    return " ".join(sorted(set(wanted))) or "none of sse4/avx/fma"
+
+
 def ratios(b, results):
     hd, cov, r = (1920, 1080), 1.0, 16
     one = b.run("threads", hd, cov, r, threads=1, repeat=3)
@@ -111,8 +125,19 @@ def ratios(b, results):
     scalar = b.run("simd", hd, cov, r, threads=1, scalar=True, repeat=2)
     ref = b.run("reference", hd, cov, r, threads=1, method="reference",
                 repeat=1, rows=34)
+    # Coverage: what every frame costs (the passes read and recombined,
+    # no pixel scattering) and, above it, the cost per scattering pixel at
+    # 10 % and 100 %: proportional to coverage when the two are alike.
+    floor = b.run("coverage", hd, cov, r, threads=1, repeat=3,
+                  no_scatter=True)
+    tenth = b.run("coverage", hd, 0.1, r, threads=1, repeat=3)
+    npix = hd[0] * hd[1]
+
+    def above(row):
+        return (row["seconds"] - floor["seconds"]) / \
+            (row["coverage"] * npix) * 1e9
     cores = os.cpu_count() or 1
-    per_core = hd[0] * hd[1] / one["seconds"] * 1e-6
+    per_core = npix / one["seconds"] * 1e-6
     results.update({
         "cores": cores,
         "separable_1080p_16px_1thread_s": one["seconds"],
@@ -124,6 +149,11 @@ def ratios(b, results):
                         one["ns_per_scattering_px"],
         "peak_working_mib": every["rss_peak_mib"] - every["rss_inputs_mib"],
         "two_rgb_images_mib": 2 * 3 * 4 * hd[0] * hd[1] / 2**20,
+        "frame_floor_s": floor["seconds"],
+        "ns_above_floor_100": above(one),
+        "ns_above_floor_10": above(tenth),
+        "coverage_10_vs_100": above(tenth) / above(one),
+        "cpu_flags": cpu_flags(),
     })
     log(f"1080p, 100% coverage, 16 px, separable: {per_core:.2f} Mpx/s per "
         f"core (1 thread), {cores} threads {results['thread_scaling']:.2f}x, "
@@ -263,6 +293,65 @@ def real_render(build, tmp, results):
         + (f", of which SSS {float(m.group(2)):.3f} s" if m else ""))
 
 
+F12_SCENES = ("head", "marble", "mixed")
+
+
+def f12(build, tmp, results, scenes, size=(1920, 1080), samples=64):
+    """What Screen-space SSS adds to F12 / `blender -b -f` on the bundled
+    scenes: the same frame rendered with the switch on, and with it off
+    twice: as the scene is (the materials' own random walk) and `plain`
+    (material SSS off, the passes on: what the add-on itself renders). The
+    add-on's overhead is on / plain - 1: the library, its files and the
+    back-light layer where the scene needs it."""
+    blender = blender_for_f12(build)
+    if not blender or not scenes:
+        log("F12 overhead skipped (no Blender, or F12_SCENES is empty)")
+        return
+    env = {**os.environ, "SSS_LIB": os.path.join(os.path.abspath(build),
+                                                 "libsss.so")}
+    for kind in scenes:
+        blend = os.path.join(tmp, f"f12_{kind}.blend")
+        subprocess.run(
+            [blender, "-b", "--factory-startup", "--python-exit-code", "1",
+             "--python", os.path.join(ROOT, "blender_scripts", "build_scene.py"),
+             "--", "--kind", kind, "--out", blend],
+            check=True, capture_output=True, text=True)
+        times = {}
+        for mode in ("plain", "on", "off"):
+            out = subprocess.run(
+                [blender, "-b", blend, "--python-exit-code", "1", "--python",
+                 os.path.join(HERE, "blender_f12.py"), "--", "--sss", mode,
+                 "--size", str(size[0]), str(size[1]), "--samples",
+                 str(samples), "--out", tmp],
+                check=True, capture_output=True, text=True, env=env)
+            m = re.search(r"f12_seconds=([\d.]+) layer=(\w+)", out.stdout)
+            if not m:
+                raise RuntimeError(f"blender_f12.py printed no timing:\n"
+                                   f"{out.stdout[-2000:]}{out.stderr[-2000:]}")
+            times[mode] = float(m.group(1))
+            if mode == "on":
+                results[f"f12_{kind}_backlight_layer"] = m.group(2)
+        for mode, t in times.items():
+            results[f"f12_{kind}_{mode}_s"] = t
+        results[f"f12_{kind}_overhead"] = times["on"] / times["plain"] - 1.0
+        results[f"f12_{kind}_vs_random_walk"] = times["on"] / times["off"]
+        log(f"F12 {kind} {size[0]}x{size[1]} {samples} spp: SSS on "
+            f"{times['on']:.1f} s, plain passes {times['plain']:.1f} s "
+            f"(+{100 * results[f'f12_{kind}_overhead']:.1f} %), switch off "
+            f"(random walk) {times['off']:.1f} s")
+    results["f12_size"] = f"{size[0]}x{size[1]}, {samples} spp"
+
+
+def blender_for_f12(build):
+    """The newest Blender the bench can run: the bpy builds in build/
+    (make bpy), else `blender` on PATH."""
+    import glob
+    found = sorted(glob.glob(os.path.join(build, "bpy-*", "bin", "blender")),
+                   key=lambda p: [int(x) for x in
+                                  re.findall(r"\d+", p.split("bpy-")[-1])])
+    return found[-1] if found else shutil.which("blender")
+
+
 def plot(rows, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -311,7 +400,8 @@ def plot(rows, path):
 
 def markdown(rows, results):
     out = ["# make bench", "",
-           f"Machine: {results['cores']} cores. Times are the best of 1-3 runs; "
+           f"Machine: {results['cores']} cores ({results['cpu_flags']}). "
+           "Times are the best of 1-3 runs; "
            "ns per scattering pixel with all cores unless noted.", "",
            "## Targets (1920x1080, 100% coverage, 16 px, separable)", "",
            "| measure | value | target |", "|---|---|---|",
@@ -319,7 +409,13 @@ def markdown(rows, results):
            f"| thread scaling, {results['cores']} threads | "
            f"{results['thread_scaling']:.2f}x | >= 1.8x on 2 cores |",
            f"| AVX2 vs scalar loop (1 thread) | {results['simd_speedup']:.2f}x | |",
-           f"| vs reference (per pixel, 1 thread) | {results['vs_reference']:.0f}x | >= 30x |"]
+           f"| vs reference (per pixel, 1 thread) | {results['vs_reference']:.0f}x | >= 30x |",
+           f"| cost per scattering pixel above the frame's floor "
+           f"({1e3 * results['frame_floor_s']:.0f} ms: passes read and "
+           f"recombined), 10 % coverage vs 100 % (1 thread) | "
+           f"{results['ns_above_floor_10']:.0f} vs "
+           f"{results['ns_above_floor_100']:.0f} ns: "
+           f"{results['coverage_10_vs_100']:.2f}x | about 1x |"]
     if "vs_bilateral" in results:
         out.append(f"| vs Blender Bilateral Blur ({results['bilateral_size']}, "
                    f"all cores) | {results['vs_bilateral']:.0f}x | >= 5x |")
@@ -327,6 +423,12 @@ def markdown(rows, results):
         out.append(f"| sss end to end vs oiiotool read+write (1080p ZIP, "
                    f"{results['exr_channels']} channels) | "
                    f"{results['end_to_end_vs_io']:.2f}x | <= 0.5x |")
+    for kind in F12_SCENES:
+        if f"f12_{kind}_overhead" in results:
+            out.append(f"| F12 with SSS vs the same passes without "
+                       f"({kind}, {results['f12_size']}) | "
+                       f"+{100 * results[f'f12_{kind}_overhead']:.1f} % | "
+                       f"<= +10 % |")
     out.append(f"| peak working memory beyond the inputs | "
                f"{results['peak_working_mib']:.0f} MiB | two RGB float images "
                f"= {results['two_rgb_images_mib']:.0f} MiB |")
@@ -359,6 +461,9 @@ def main():
         end_to_end(b, args.build, tmp, results)
         bilateral(b, tmp, results)
         real_render(args.build, tmp, results)
+        f12(args.build, tmp, results,
+            [k for k in os.environ.get("F12_SCENES", " ".join(F12_SCENES))
+             .split() if k])
     with open(os.path.join(args.out, "bench.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["tag"] + FIELDS)
         w.writeheader()

@@ -74,3 +74,18 @@ def test_dump_makes_a_frame_sss_processes(bench, sss_cmd, tmp_path):
     proc = run(sss_cmd, frame, "-o", out, "--scene", prefix + "_scene.json",
                check=0)
     assert "sss" in proc.stdout and out.exists()
+
+
+def test_no_scatter_is_the_frame_floor(bench):
+    """--no-scatter: the material matches no pixel, so only the passes are
+    read and recombined (what the bench subtracts for coverage)."""
+    out = subprocess.run([bench, "--size", "40", "30", "--radius", "4",
+                          "--repeat", "1", "--no-scatter", "--header"],
+                         capture_output=True, text=True, check=True).stdout
+    row = next(csv.DictReader(io.StringIO(out)))
+    assert float(row["coverage"]) == 0.0 and float(row["seconds"]) > 0
+
+
+def test_cpu_flags_named():
+    flags = load_driver().cpu_flags()
+    assert isinstance(flags, str) and flags
