@@ -180,20 +180,22 @@ class _MaterialPanel:
         return _has_sss(_material(context, cls.sidebar))
 
 
-class SSS_PT_material(_MaterialPanel, bpy.types.Panel):
+class _PropertiesPanel:
+    """Where Material Properties' panels live."""
     bl_space_type = 'PROPERTIES'
     bl_region_type = 'WINDOW'
     bl_context = "material"
+
+
+class SSS_PT_material(_MaterialPanel, _PropertiesPanel, bpy.types.Panel):
     bl_label = "Screen-Space SSS"
 
     def draw(self, context):
         draw_material_settings(self.layout, context, context.material)
 
 
-class SSS_PT_material_transmission(_MaterialPanel, bpy.types.Panel):
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
-    bl_context = "material"
+class SSS_PT_material_transmission(_MaterialPanel, _PropertiesPanel,
+                                   bpy.types.Panel):
     bl_label = "Transmission"
     bl_parent_id = "SSS_PT_material"
     bl_options = {'DEFAULT_CLOSED'}
@@ -202,10 +204,8 @@ class SSS_PT_material_transmission(_MaterialPanel, bpy.types.Panel):
         draw_material_transmission(self.layout, context.material)
 
 
-class SSS_PT_material_advanced(_MaterialPanel, bpy.types.Panel):
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
-    bl_context = "material"
+class SSS_PT_material_advanced(_MaterialPanel, _PropertiesPanel,
+                               bpy.types.Panel):
     bl_label = "Advanced"
     bl_parent_id = "SSS_PT_material"
     bl_options = {'DEFAULT_CLOSED'}
