@@ -15,7 +15,9 @@ energy: a large thick box (2 x 2 m face, 1 m deep) faces an orthographic
   add-on's SSS-off render). The mean Combined over the central half of the
   frame of one divided by the other is the energy ratio RW / diffuse of
   that albedo; the diffuse side is A exactly under the white world (a
-  check). Written to DIR/energy.csv.
+  check). --view-angles turns the box about its vertical axis so that the
+  camera sees the face at those angles from its normal (the random walk's
+  energy depends on it from Blender 4.0). Written to DIR/energy.csv.
 edge: the same box under a sun at normal incidence, half of it shadowed by
   a plate that only casts shadows (invisible to camera and to indirect
   rays): random walk against the SSS-off render scattered by libsss with
@@ -80,12 +82,19 @@ def parse_args():
     p.add_argument("--light", default="world", choices=("world", "sun"))
     p.add_argument("--sun-angle", type=float, default=0.0,
                    help="energy with --light sun: degrees from the normal")
+    p.add_argument("--view-angles", default="0",
+                   help="energy: degrees between the camera's axis and the "
+                   "face's normal (the box is turned about its vertical "
+                   "axis), comma-separated")
     p.add_argument("--view", type=float, default=0.2,
                    help="metres of the face the camera sees")
     p.add_argument("--albedos", help="override: a,b,c;d,e,f")
     args = p.parse_args(argv)
     args.part = args.part.split(",")
     args.radii = [float(x) for x in args.radii.split(",")]
+    args.view_angles = [float(x) for x in args.view_angles.split(",")]
+    if not all(0.0 <= a < 90.0 for a in args.view_angles):
+        p.error("--view-angles: each in [0, 90) degrees")
     args.out = os.path.abspath(args.out)
     global VIEW
     VIEW = args.view
@@ -109,8 +118,9 @@ def reset():
     return scene
 
 
-def slab(scene):
-    """The box: face at y = 0 towards the camera, 6 x 6 m, 4 m deep."""
+def slab(scene, turn=0.0):
+    """The box: face at y = 0 towards the camera, 6 x 6 m, 4 m deep, turned
+    by `turn` degrees about the vertical axis through the face's middle."""
     mat = bpy.data.materials.new("Slab")
     mat.pass_index = 1
     bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
@@ -128,6 +138,7 @@ def slab(scene):
     bm.to_mesh(mesh)
     bm.free()
     mesh.materials.append(mat)
+    obj.rotation_euler = (0.0, 0.0, math.radians(turn))
     return obj, mat
 
 
@@ -228,50 +239,52 @@ def albedo_sets(args):
 
 def part_energy(args):
     rows = []
-    for radius in args.radii:
-        for albedo in albedo_sets(args):
-            scene = reset()
-            _, mat = slab(scene)
-            if args.light == "world":
-                world(scene, 1.0)
-            else:
-                world(scene, 0.0)
-                t = math.radians(args.sun_angle)
-                sun(scene, (math.sin(t), math.cos(t), 0.0))
-            setup_render(scene, args, None)
-            n = args.size
-            win = (slice(n // 4, 3 * n // 4), slice(n // 4, 3 * n // 4))
-            out = {}
-            for label, sub in (("off", 0.0), ("rw", 1.0)):
-                set_material(mat, albedo, radius, sub, args.method)
-                path = os.path.join(args.out, "work",
-                                    f"energy_{label}_{radius}_"
-                                    f"{albedo[0]}.exr")
-                ch, sec = render_to(scene, path, 1 if label == "off" else 2)
-                comb = rgb(ch, "Combined")[win]
-                diff = (rgb(ch, "DiffDir") + rgb(ch, "DiffInd"))[win] * \
-                    rgb(ch, "DiffCol")[win]
-                out[label] = (comb.reshape(-1, 3), diff.reshape(-1, 3), sec)
-            for c in range(3):
-                off = out["off"][0][:, c]
-                rw = out["rw"][0][:, c]
-                ratio = rw.mean() / off.mean()
-                # Standard error of the ratio from pixel scatter.
-                se = ratio * math.hypot(rw.std() / rw.mean(),
-                                        off.std() / max(off.mean(), 1e-9)) \
-                    / math.sqrt(rw.size)
-                row = dict(method=args.method, light=args.light,
-                           sun_angle=args.sun_angle,
-                           radius=radius, albedo=albedo[c],
-                           off=float(off.mean()), rw=float(rw.mean()),
-                           ratio=float(ratio), stderr=float(se),
-                           rw_diffpasses=float(out["rw"][1][:, c].mean()),
-                           seconds_off=out["off"][2],
-                           seconds_rw=out["rw"][2])
-                rows.append(row)
-                log(f"energy r={radius} A={albedo[c]:.3f}: off "
-                    f"{row['off']:.4f} rw {row['rw']:.4f} ratio "
-                    f"{ratio:.4f} +- {se:.4f} ({out['rw'][2]:.1f} s)")
+    for radius, view_angle, albedo in (
+            (r, v, a) for r in args.radii for v in args.view_angles
+            for a in albedo_sets(args)):
+        scene = reset()
+        _, mat = slab(scene, view_angle)
+        if args.light == "world":
+            world(scene, 1.0)
+        else:
+            world(scene, 0.0)
+            t = math.radians(args.sun_angle)
+            sun(scene, (math.sin(t), math.cos(t), 0.0))
+        setup_render(scene, args, None)
+        n = args.size
+        win = (slice(n // 4, 3 * n // 4), slice(n // 4, 3 * n // 4))
+        out = {}
+        for label, sub in (("off", 0.0), ("rw", 1.0)):
+            set_material(mat, albedo, radius, sub, args.method)
+            path = os.path.join(args.out, "work",
+                                f"energy_{label}_{radius}_"
+                                f"{albedo[0]}.exr")
+            ch, sec = render_to(scene, path, 1 if label == "off" else 2)
+            comb = rgb(ch, "Combined")[win]
+            diff = (rgb(ch, "DiffDir") + rgb(ch, "DiffInd"))[win] * \
+                rgb(ch, "DiffCol")[win]
+            out[label] = (comb.reshape(-1, 3), diff.reshape(-1, 3), sec)
+        for c in range(3):
+            off = out["off"][0][:, c]
+            rw = out["rw"][0][:, c]
+            ratio = rw.mean() / off.mean()
+            # Standard error of the ratio from pixel scatter.
+            se = ratio * math.hypot(rw.std() / rw.mean(),
+                                    off.std() / max(off.mean(), 1e-9)) \
+                / math.sqrt(rw.size)
+            row = dict(method=args.method, light=args.light,
+                       sun_angle=args.sun_angle,
+                       view_angle=view_angle, radius=radius, albedo=albedo[c],
+                       off=float(off.mean()), rw=float(rw.mean()),
+                       ratio=float(ratio), stderr=float(se),
+                       rw_diffpasses=float(out["rw"][1][:, c].mean()),
+                       seconds_off=out["off"][2],
+                       seconds_rw=out["rw"][2])
+            rows.append(row)
+            log(f"energy r={radius} view {view_angle:g} A="
+                f"{albedo[c]:.3f}: off "
+                f"{row['off']:.4f} rw {row['rw']:.4f} ratio "
+                f"{ratio:.4f} +- {se:.4f} ({out['rw'][2]:.1f} s)")
     name = f"energy_{args.method.lower()}_{args.light}" + (
         f"{args.sun_angle:g}" if args.light == "sun" else "") + ".csv"
     write_csv(os.path.join(args.out, name), rows)

@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 7
+#define SSS_ABI_VERSION 8
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -381,11 +381,13 @@ SSS_API sss_result sss_transmission_slab(const sss_material *mat,
                                          double zb[3]);
 
 /* The energy gain of a calibration for a diffuse colour (albedo, clamped
- * to [0, 1]; a non-finite channel gets 1): the measured reflectance of the
- * calibrated renderer over the plain diffuse lobe's. NONE gives 1. */
+ * to [0, 1]; a non-finite channel gets 1) seen at view_cosine, |cos| of
+ * the angle between the surface's normal and the ray to the camera (1:
+ * head-on; measured to 85 degrees, held beyond): the measured reflectance
+ * of the calibrated renderer over the plain diffuse lobe's. NONE gives 1. */
 SSS_API sss_result sss_calibration_gain(int32_t calibration,
                                         const float albedo[3],
-                                        float gain[3]);
+                                        float view_cosine, float gain[3]);
 
 /* --------------------------------------------------------------- options */
 

@@ -146,7 +146,8 @@ typedef struct rows_ctx {
 	const int16_t *by_index;
 	const sss__transmission *transmission;
 	double background_depth;
-	int32_t w;
+	int32_t w, h;
+	const sss__projection *proj; /* for the view cosine of calibrations */
 	float *signal;
 	int64_t signal_px, signal_ch; /* layout, as in sss__job */
 	int16_t *slot;
@@ -241,9 +242,17 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				}
 				light[c] = l;
 			}
-			if (slot[i] >= 0) /* energy calibration, at the exit pixel's
-			                     colour (sss_calibration.c) */
-				sss__calibration_apply(&materials[slot[i]], col, light);
+			if (slot[i] >= 0) { /* energy calibration, at the exit
+			                       pixel's colour and view
+			                       (sss_calibration.c) */
+				const sss_material *m = &materials[slot[i]];
+				float mu = sss__calibration_needs_view(m)
+				           ? sss__view_cosine(&p->depth, slot, ctx->proj,
+				                              w, ctx->h, x, y)
+				           : 1.0f;
+				sss__calibration_apply(m, kernels[slot[i]].calibration_fade,
+				                       mu, col, light);
+			}
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
 				           y * sss__stride(out_diffuse_light) +
@@ -420,9 +429,14 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	if (opt.method == SSS_METHOD_SEPARABLE) /* reads colour planes */
 		job.signal_px = 1, job.signal_ch = (int64_t)npix;
 
-	rows_ctx rc = {p, materials, kernels, by_index, transmission,
-	               opt.background_depth, w, signal, job.signal_px,
-	               job.signal_ch, slot, out_combined, out_diffuse_light};
+	rows_ctx rc = {
+		.p = p, .materials = materials, .kernels = kernels,
+		.by_index = by_index, .transmission = transmission,
+		.background_depth = opt.background_depth, .w = w, .h = h,
+		.proj = &job.proj, .signal = signal, .signal_px = job.signal_px,
+		.signal_ch = job.signal_ch, .slot = slot,
+		.out_combined = out_combined, .out_diffuse_light = out_diffuse_light,
+	};
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
 
 	if (material_count > 0) {

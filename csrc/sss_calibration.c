@@ -2,7 +2,8 @@
  * the SSS-off render does not, measured on flat slabs
  * (blender_scripts/calibrate.py, Cycles CPU, denoising, adaptive sampling
  * and clamping off): Blender 3.4.1 in sections 1 and 2, 4.5.15 and 5.0.1
- * (4.0 rewrote the random walk) in section 3.
+ * (4.0 rewrote the random walk) in section 3, all three seen at an angle
+ * in section 4.
  *
  * 1. Energy. A box 6 x 6 m wide and 4 m deep (2 x 2 x 1 m for the world
  *    runs), Principled BSDF with Specular 0 and Roughness 0.5, Base Color =
@@ -131,28 +132,112 @@
  *    (r = 0.05 m at 64 x 64 gave the same within 10 %, below a pixel at
  *    low A), and SSS_BURLEY_CYCLES4_RANDOM_WALK interpolates it. 5.0.1:
  *    the same fits within 4 % (one step of the fit's grid), for both walks.
+ *
+ * 4. View. Sections 1 and 3 looked at the face head-on. Turned about its
+ *    vertical axis so that the camera sees it at 30, 45, 60, 70, 80 and 85
+ *    degrees from its normal (calibrate.py --view-angles; white world,
+ *    r = 0.05 m, 128 samples, 48 x 48, standard errors 0.002 - 0.005), the
+ *    random walk's energy over the diffuse lobe's grows with the angle, on
+ *    every version: 4.5.15's Random Walk (Skin) goes from 0.898 head-on to
+ *    1.04 at 60 and 1.27 at 85 degrees at A = 0.05 (0.954, 1.029, 1.114 at
+ *    A = 0.5), its Random Walk from 0.768 to 1.10 and 1.76; 3.4.1's walk
+ *    from 1.01 to 1.025 and 1.32 at every A up to 0.9. 5.0.1 measures as
+ *    4.5.15 (60 and 85 degrees, A = 0.05, 0.5, 0.9: within 0.03, 0.003,
+ *    0.002). So the gain is g(A, mu), mu the cosine of the view angle,
+ *    which the library takes per pixel from the Depth pass
+ *    (sss__view_cosine). Head-on gains alone made every bundled scene
+ *    worse than no calibration on 4.5 (by 1.4 - 1.8x the quarter-
+ *    resolution error of the render without SSS where the kernel is under
+ *    a pixel): a sphere shows every angle, and its mean gain is near 1.
+ *    The rows below are this run (head-on within the errors of sections 1
+ *    and 3); A = 0 is as 0.05, and entries at A >= 0.9 are moved up by at
+ *    most 0.006 (3.4 at A = 1), most by 0.0002, so that A g(A) never
+ *    decreases.
  */
 #include "sss_internal.h"
 
 /* Reflectance of the random walk over the Principled diffuse lobe's, at
- * the albedos of cal_albedo, per calibration (section 1 and 3). */
+ * the albedos of cal_albedo seen at the angles of cal_view_cosine, per
+ * calibration (section 4; the 0-degree rows are sections 1 and 3 measured
+ * again in the same runs). */
 static const float cal_albedo[] = {0.0f, 0.05f, 0.1f, 0.2f, 0.3f, 0.4f, 0.5f,
                                    0.6f, 0.7f, 0.8f, 0.85f, 0.9f, 0.95f,
                                    0.98f, 0.99f, 1.0f};
 #define CAL_N ((int)(sizeof cal_albedo / sizeof *cal_albedo))
-static const float cal_gain[][CAL_N] = {
+/* cos of 0, 30, 45, 60, 70, 80 and 85 degrees */
+static const float cal_view_cosine[] = {1.0f, 0.8660254f, 0.7071068f, 0.5f,
+                                        0.3420201f, 0.1736482f, 0.0871557f};
+#define VIEW_N ((int)(sizeof cal_view_cosine / sizeof *cal_view_cosine))
+static const float cal_gain[][VIEW_N][CAL_N] = {
 	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
-		1.010f, 1.010f, 1.012f, 1.011f, 1.013f, 1.011f, 1.012f, 1.010f,
-		1.009f, 1.012f, 1.011f, 1.006f, 0.968f, 0.9405f, 0.9315f,
-		0.9225f},
+		/* 0 degrees */
+		{1.0090f, 1.0090f, 1.0092f, 1.0086f, 1.0138f, 1.0117f, 1.0081f, 1.0135f,
+		 1.0104f, 1.0080f, 1.0129f, 1.0037f, 0.9662f, 0.9396f, 0.9304f, 0.9211f},
+		/* 30 degrees */
+		{1.0087f, 1.0087f, 1.0099f, 1.0088f, 1.0133f, 1.0123f, 1.0090f, 1.0168f,
+		 1.0104f, 1.0100f, 1.0157f, 1.0034f, 0.9657f, 0.9411f, 0.9319f, 0.9226f},
+		/* 45 degrees */
+		{1.0122f, 1.0122f, 1.0127f, 1.0112f, 1.0146f, 1.0136f, 1.0105f, 1.0192f,
+		 1.0118f, 1.0112f, 1.0174f, 1.0056f, 0.9679f, 0.9420f, 0.9327f, 0.9234f},
+		/* 60 degrees */
+		{1.0249f, 1.0249f, 1.0254f, 1.0251f, 1.0298f, 1.0276f, 1.0248f, 1.0322f,
+		 1.0261f, 1.0253f, 1.0314f, 1.0196f, 0.9820f, 0.9576f, 0.9484f, 0.9390f},
+		/* 70 degrees */
+		{1.0691f, 1.0691f, 1.0696f, 1.0698f, 1.0735f, 1.0723f, 1.0696f, 1.0746f,
+		 1.0701f, 1.0705f, 1.0750f, 1.0631f, 1.0258f, 1.0016f, 0.9925f, 0.9826f},
+		/* 80 degrees */
+		{1.1975f, 1.1975f, 1.1974f, 1.1953f, 1.1970f, 1.1959f, 1.1941f, 1.1996f,
+		 1.1934f, 1.1952f, 1.1986f, 1.1875f, 1.1505f, 1.1271f, 1.1181f, 1.1070f},
+		/* 85 degrees */
+		{1.3159f, 1.3159f, 1.3157f, 1.3145f, 1.3165f, 1.3154f, 1.3133f, 1.3184f,
+		 1.3126f, 1.3147f, 1.3178f, 1.3073f, 1.2702f, 1.2462f, 1.2371f, 1.2248f},
+	},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
-		0.9036f, 0.9036f, 0.9087f, 0.9196f, 0.9317f, 0.9436f, 0.9545f,
-		0.9646f, 0.9763f, 0.9889f, 0.9951f, 0.9916f, 0.9546f, 0.9262f,
-		0.9170f, 0.9080f},
+		/* 0 degrees */
+		{0.8975f, 0.8975f, 0.9054f, 0.9189f, 0.9275f, 0.9416f, 0.9537f, 0.9619f,
+		 0.9758f, 0.9888f, 0.9940f, 0.9923f, 0.9553f, 0.9263f, 0.9170f, 0.9091f},
+		/* 30 degrees */
+		{0.9282f, 0.9282f, 0.9353f, 0.9468f, 0.9537f, 0.9654f, 0.9738f, 0.9794f,
+		 0.9889f, 0.9991f, 1.0023f, 0.9980f, 0.9602f, 0.9309f, 0.9215f, 0.9132f},
+		/* 45 degrees */
+		{0.9729f, 0.9729f, 0.9777f, 0.9836f, 0.9876f, 0.9939f, 0.9971f, 0.9984f,
+		 1.0021f, 1.0084f, 1.0108f, 1.0025f, 0.9641f, 0.9351f, 0.9257f, 0.9165f},
+		/* 60 degrees */
+		{1.0423f, 1.0423f, 1.0422f, 1.0392f, 1.0347f, 1.0328f, 1.0294f, 1.0267f,
+		 1.0215f, 1.0210f, 1.0217f, 1.0077f, 0.9683f, 0.9394f, 0.9300f, 0.9210f},
+		/* 70 degrees */
+		{1.1048f, 1.1048f, 1.1005f, 1.0898f, 1.0768f, 1.0684f, 1.0578f, 1.0488f,
+		 1.0384f, 1.0304f, 1.0273f, 1.0131f, 0.9729f, 0.9436f, 0.9341f, 0.9248f},
+		/* 80 degrees */
+		{1.2035f, 1.2035f, 1.1889f, 1.1607f, 1.1357f, 1.1147f, 1.0927f, 1.0739f,
+		 1.0568f, 1.0415f, 1.0349f, 1.0185f, 0.9773f, 0.9483f, 0.9388f, 0.9295f},
+		/* 85 degrees */
+		{1.2665f, 1.2665f, 1.2448f, 1.2055f, 1.1716f, 1.1425f, 1.1137f, 1.0891f,
+		 1.0681f, 1.0478f, 1.0379f, 1.0215f, 0.9799f, 0.9508f, 0.9412f, 0.9318f},
+	},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		0.7686f, 0.7686f, 0.7808f, 0.8054f, 0.8328f, 0.8575f, 0.8819f,
-		0.9059f, 0.9318f, 0.9609f, 0.9722f, 0.9763f, 0.9416f, 0.9128f,
-		0.9036f, 0.8946f},
+		/* 0 degrees */
+		{0.7675f, 0.7675f, 0.7804f, 0.8058f, 0.8306f, 0.8556f, 0.8806f, 0.9048f,
+		 0.9313f, 0.9606f, 0.9733f, 0.9780f, 0.9435f, 0.9147f, 0.9055f, 0.8965f},
+		/* 30 degrees */
+		{0.8353f, 0.8353f, 0.8465f, 0.8674f, 0.8866f, 0.9058f, 0.9242f, 0.9404f,
+		 0.9594f, 0.9804f, 0.9883f, 0.9886f, 0.9525f, 0.9234f, 0.9141f, 0.9050f},
+		/* 45 degrees */
+		{0.9320f, 0.9320f, 0.9395f, 0.9523f, 0.9630f, 0.9724f, 0.9804f, 0.9859f,
+		 0.9935f, 1.0029f, 1.0050f, 1.0005f, 0.9626f, 0.9332f, 0.9238f, 0.9146f},
+		/* 60 degrees */
+		{1.0980f, 1.0980f, 1.0963f, 1.0910f, 1.0830f, 1.0742f, 1.0641f, 1.0520f,
+		 1.0421f, 1.0341f, 1.0278f, 1.0162f, 0.9757f, 0.9459f, 0.9364f, 0.9271f},
+		/* 70 degrees */
+		{1.2732f, 1.2732f, 1.2585f, 1.2285f, 1.1982f, 1.1686f, 1.1392f, 1.1096f,
+		 1.0830f, 1.0595f, 1.0460f, 1.0286f, 0.9860f, 0.9559f, 0.9463f, 0.9369f},
+		/* 80 degrees */
+		{1.5461f, 1.5461f, 1.5056f, 1.4287f, 1.3573f, 1.2938f, 1.2353f, 1.1797f,
+		 1.1312f, 1.0887f, 1.0672f, 1.0428f, 0.9977f, 0.9672f, 0.9575f, 0.9480f},
+		/* 85 degrees */
+		{1.7604f, 1.7604f, 1.6942f, 1.5743f, 1.4684f, 1.3775f, 1.2970f, 1.2244f,
+		 1.1612f, 1.1063f, 1.0793f, 1.0508f, 1.0044f, 0.9737f, 0.9639f, 0.9543f},
+	},
 };
 
 /* The interval [cal_albedo[i - 1], cal_albedo[i]] holding a (searched from
@@ -204,31 +289,82 @@ static int is_calibration(int32_t calibration)
 	       calibration <= SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
 }
 
+/* g at albedo a seen at view cosine mu: linear in mu between the rows
+ * (clamped to the measured 0 .. 85 degrees), each row gain_at. */
+static float gain_seen(int32_t calibration, float a, float mu)
+{
+	const float (*rows)[CAL_N] = cal_gain[calibration];
+	if (!(mu < 1.0f))
+		return gain_at(rows[0], a); /* also NaN: head-on */
+	if (mu <= cal_view_cosine[VIEW_N - 1])
+		return gain_at(rows[VIEW_N - 1], a);
+	int i = 1;
+	while (cal_view_cosine[i] > mu)
+		i++;
+	float t = (cal_view_cosine[i - 1] - mu) /
+	          (cal_view_cosine[i - 1] - cal_view_cosine[i]);
+	float g0 = gain_at(rows[i - 1], a), g1 = gain_at(rows[i], a);
+	return g0 + t * (g1 - g0);
+}
+
 sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
-                                float gain[3])
+                                float view_cosine, float gain[3])
 {
 	if (!albedo || !gain)
 		return SSS_ERR_INVALID_ARGUMENT;
 	if (calibration != SSS_CALIBRATION_NONE && !is_calibration(calibration))
 		return SSS_ERR_INVALID_ARGUMENT;
+	float mu = fabsf(view_cosine);
 	for (int c = 0; c < 3; c++)
 		gain[c] = is_calibration(calibration)
-		          ? gain_at(cal_gain[calibration], albedo[c]) : 1.0f;
+		          ? gain_seen(calibration, albedo[c], mu) : 1.0f;
 	return SSS_OK;
 }
 
-void sss__calibration_apply(const sss_material *mat, const float *diff_col,
+/* Cycles (kernel/types.h, every version from 2.7 to 5.0) renders a channel
+ * whose radius is below 1e-8 with its diffuse BSDF instead of the walk: the
+ * gain jumps to 1 there. On the world-lit slab of section 3 (Random Walk
+ * (Skin), 4.5.15) the walk's energy is g(A) at every radius from 2e-8 to
+ * 1e-2 m (A = 0.3 / 0.5 / 0.8: 0.925 / 0.960 / 0.993, within 3e-4), but on
+ * the bundled scenes, lit by lamps, it is not: at 1e-6 times their radius
+ * (1e-8 to 1.1e-7 m) it returns 0.35 - 0.68 of the diffuse render's light,
+ * at 1e-4 times (1e-6 to 1.1e-5 m) 0.88 - 1.0, and from there up the gain
+ * of the slab, seen at each pixel's angle, cuts the error of the render
+ * without SSS by half (make sweep). So the gain applies in full from a
+ * radius of 1e-5, not at all at 1e-7 and below, log-linear between: the
+ * output tends continuously to the render without SSS as the radius
+ * vanishes, and does not follow the walk where it is unreliable. */
+#define CALIBRATION_NONE_BELOW 1e-7
+#define CALIBRATION_FULL_FROM 1e-5
+
+float sss__calibration_fade(double radius)
+{
+	if (!(radius > CALIBRATION_NONE_BELOW))
+		return 0.0f; /* also NaN */
+	double f = log10(radius / CALIBRATION_NONE_BELOW) /
+	           log10(CALIBRATION_FULL_FROM / CALIBRATION_NONE_BELOW);
+	return f >= 1.0 ? 1.0f : (float)f;
+}
+
+int sss__calibration_needs_view(const sss_material *mat)
+{
+	return is_calibration(mat->calibration);
+}
+
+void sss__calibration_apply(const sss_material *mat, const float fade[3],
+                            float view_cosine, const float *diff_col,
                             float *light)
 {
 	if (!is_calibration(mat->calibration))
 		return;
-	const float *table = cal_gain[mat->calibration];
 	float s = mat->strength;
 	for (int c = 0; c < 3; c++) {
-		float m = mat->kind == SSS_PROFILE_JIMENEZ
-		          ? s * mat->jimenez_strength[c] : s;
+		float m = (mat->kind == SSS_PROFILE_JIMENEZ
+		           ? s * mat->jimenez_strength[c] : s) * fade[c];
 		if (m > 0.0f)
-			light[c] *= 1.0f + m * (gain_at(table, diff_col[c]) - 1.0f);
+			light[c] *= 1.0f + m * (gain_seen(mat->calibration,
+			                                  diff_col[c], view_cosine) -
+			                        1.0f);
 	}
 }
 

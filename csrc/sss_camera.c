@@ -106,3 +106,67 @@ void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
 	out[1] = (job->proj.cy - (y + 0.5)) / job->proj.fy * scale;
 	out[2] = z;
 }
+
+/* The view-space point of pixel (x, y) at planar depth z. */
+static void unproject(const sss__projection *p, int32_t x, int32_t y,
+                      double z, double out[3])
+{
+	double scale = p->ortho ? 1.0 : z;
+	out[0] = (x + 0.5 - p->cx) / p->fx * scale;
+	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
+	out[2] = z;
+}
+
+/* The step from pixel (x, y) to its neighbour along one axis, on the side
+ * whose depth is nearer its own (so that a silhouette is not read as a
+ * slope), from neighbours of the same slot only; 0 when neither is. */
+static int surface_step(const sss_image *depth, const int16_t *slot,
+                        const sss__projection *p, int32_t w, int32_t h,
+                        int32_t x, int32_t y, int dx, int dy, double z,
+                        double step[3])
+{
+	double best = INFINITY, here[3];
+	int found = 0;
+	for (int side = -1; side <= 1; side += 2) {
+		int32_t nx = x + side * dx, ny = y + side * dy;
+		if (nx < 0 || ny < 0 || nx >= w || ny >= h ||
+		    slot[(size_t)ny * w + nx] != slot[(size_t)y * w + x])
+			continue;
+		double nz = sss__at(depth, nx, ny)[0];
+		if (!(fabs(nz - z) < best))
+			continue;
+		best = fabs(nz - z);
+		double there[3];
+		unproject(p, x, y, z, here);
+		unproject(p, nx, ny, nz, there);
+		for (int c = 0; c < 3; c++)
+			step[c] = side * (there[c] - here[c]);
+		found = 1;
+	}
+	return found;
+}
+
+float sss__view_cosine(const sss_image *depth, const int16_t *slot,
+                       const sss__projection *p, int32_t w, int32_t h,
+                       int32_t x, int32_t y)
+{
+	double z = sss__at(depth, x, y)[0], sx[3], sy[3], pos[3];
+	if (!surface_step(depth, slot, p, w, h, x, y, 1, 0, z, sx) ||
+	    !surface_step(depth, slot, p, w, h, x, y, 0, 1, z, sy))
+		return 1.0f;
+	double n[3] = {sx[1] * sy[2] - sx[2] * sy[1],
+	               sx[2] * sy[0] - sx[0] * sy[2],
+	               sx[0] * sy[1] - sx[1] * sy[0]};
+	unproject(p, x, y, z, pos);
+	double v[3] = {0.0, 0.0, 1.0}; /* towards the camera, up to sign */
+	if (!p->ortho)
+		for (int c = 0; c < 3; c++)
+			v[c] = pos[c];
+	double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+	double vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+	if (!(nn > 0.0 && vv > 0.0) || !isfinite(nn * vv))
+		return 1.0f;
+	double mu = fabs(n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) /
+	            sqrt(nn * vv);
+	return mu < 1.0 ? (float)mu : 1.0f;
+}

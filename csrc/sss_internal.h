@@ -19,6 +19,9 @@ typedef struct sss__kernel {
 	double support;      /* scene units; 0 = no scattering */
 	double len;          /* scene units per metre of profile length */
 	float mix[3];        /* per-channel share that scatters (strength) */
+	float calibration_fade[3]; /* 0..1 per channel: how much of the
+	                              energy calibration applies at this
+	                              radius (sss__calibration_fade) */
 	int32_t texturing;   /* sss_texturing */
 	int32_t taps;        /* odd, >= 1 */
 	/* Per channel, at x_k = support * (k/(N-1))^2: */
@@ -93,7 +96,18 @@ void sss__line_mass3(const sss__kernel *k, double a, double b,
 double sss__cycles_rw_mfp_over_radius(double albedo);
 double sss__cycles_rw_d_over_radius(double albedo);
 double sss__cycles4_rw_d_over_radius(double albedo);
-void sss__calibration_apply(const sss_material *mat, const float *diff_col,
+/* How much of the energy calibration applies to a channel whose radius
+ * (Burley: Subsurface Radius x Scale; other profiles: their support / 16)
+ * is `radius` scene units: 1 from 1e-5 up, 0 at and below 1e-7 (where
+ * Cycles' walk is unreliable, and below 1e-8 its diffuse BSDF), log-linear
+ * between, so the output tends continuously to the uncalibrated blur,
+ * itself the identity there. */
+float sss__calibration_fade(double radius);
+/* Whether the material's gain depends on the view (then
+ * sss__view_cosine is worth computing). */
+int sss__calibration_needs_view(const sss_material *mat);
+void sss__calibration_apply(const sss_material *mat, const float fade[3],
+                            float view_cosine, const float *diff_col,
                             float *light);
 
 /* Camera (sss_camera.c). */
@@ -102,6 +116,13 @@ sss_result sss__projection_make(const sss_camera *cam, int32_t width,
                                 char *errbuf, size_t errbuf_len);
 void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
                          double out[3]);
+/* |cos| of the angle between the surface at pixel (x, y) and the ray to
+ * the camera, from the Depth pass (the surface's slope towards the
+ * neighbours of the same slot, on each axis the side of nearer depth);
+ * 1 where no neighbour of its slot tells the slope. */
+float sss__view_cosine(const sss_image *depth, const int16_t *slot,
+                       const sss__projection *p, int32_t w, int32_t h,
+                       int32_t x, int32_t y);
 double sss__pixels_per_unit_x(const sss__projection *p, double z);
 double sss__pixels_per_unit_y(const sss__projection *p, double z);
 /* The largest kernel support (scene units) worth tabulating for pixels at

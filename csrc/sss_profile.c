@@ -308,6 +308,7 @@ sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
 	k->texturing = mat->texturing;
 	k->taps = odd_taps(mat->taps > 0 ? mat->taps : opt->taps);
 	double len = (double)opt->radius_scale / unit_scale; /* metres -> units */
+	const double unclamped_len = len;
 	if (max_support > 0.0 && mat->kind != SSS_PROFILE_NONE) {
 		/* Support grows linearly with len: past the limit every profile
 		 * length is shrunk alike, so the kernel keeps its shape. */
@@ -340,6 +341,14 @@ sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
 		double s = channel_make(mat, c, len, k->taps, &ch[c]);
 		if (s > support)
 			support = s;
+		/* The calibration follows the radius Cycles sees, in scene
+		 * units and before the reach limit shrank it. */
+		channel one;
+		double radius = mat->kind == SSS_PROFILE_BURLEY
+		                ? mat->radius[c] * unclamped_len
+		                : channel_make(mat, c, unclamped_len, k->taps,
+		                               &one) / 16.0;
+		k->calibration_fade[c] = sss__calibration_fade(radius);
 	}
 	/* A profile too small for a double, or one that overflowed, does not
 	 * scatter: the identity is the right limit of the former, and the

@@ -14,15 +14,21 @@
 #define W 24
 #define H 20
 
+/* The orthographic camera of run(): ORTHO scene units across W pixels. */
+#define ORTHO 0.5
+
+/* A flat field on a plane turned `tilt` radians about the vertical axis
+ * from facing the camera (depth grows to the right). */
 static void flat_passes(sss_passes *p, float *dd, float *col, float *z,
-                        float *idx, float light, const float c3[3])
+                        float *idx, float light, const float c3[3],
+                        double tilt)
 {
 	for (int i = 0; i < W * H; i++) {
 		for (int c = 0; c < 3; c++) {
 			dd[3 * i + c] = light;
 			col[3 * i + c] = c3[c];
 		}
-		z[i] = 2.0f;
+		z[i] = (float)(2.0 + tan(tilt) * (i % W + 0.5) * ORTHO / W);
 		idx[i] = 1.0f;
 	}
 	memset(p, 0, sizeof *p);
@@ -38,53 +44,81 @@ static void test_table(void)
 	                               SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN,
 	                               SSS_CALIBRATION_CYCLES4_RANDOM_WALK};
 	for (int k = 0; k < 3; k++) {
-		float prev = -1.0f;
-		int monotone = 1, finite = 1, sane = 1;
-		for (int i = 0; i <= 1000; i++) {
-			float a = (float)i / 1000.0f, al[3] = {a, a, a}, g[3];
-			CHECK_STATUS("table-status", SSS_OK,
-			             sss_calibration_gain(cals[k], al, g));
-			finite &= isfinite(g[0]) && g[0] == g[1] && g[1] == g[2];
-			sane &= g[0] > 0.7f && g[0] < 1.2f;
-			/* Reflectance A g(A) never decreases with A. */
-			if (a * g[0] < prev - 1e-6f)
-				monotone = 0;
-			prev = a * g[0];
+		int monotone = 1, finite = 1, sane = 1, ok = 1;
+		for (int v = 0; v <= 20; v++) {
+			float mu = 1.0f - (float)v / 20.0f, prev = -1.0f;
+			for (int i = 0; i <= 1000; i++) {
+				float a = (float)i / 1000.0f, al[3] = {a, a, a}, g[3];
+				ok &= sss_calibration_gain(cals[k], al, mu, g) == SSS_OK;
+				finite &= isfinite(g[0]) && g[0] == g[1] && g[1] == g[2];
+				sane &= g[0] > 0.7f && g[0] < 1.8f;
+				/* Reflectance A g(A) never decreases with A. */
+				if (a * g[0] < prev - 1e-6f)
+					monotone = 0;
+				prev = a * g[0];
+			}
 		}
+		CHECK("table-status", ok, "calibration %d: an error", cals[k]);
 		CHECK("table-finite", finite, "calibration %d: non-finite or "
 		      "channel-dependent gain", cals[k]);
-		CHECK("table-sane", sane, "calibration %d: gain outside (0.7, 1.2)",
+		CHECK("table-sane", sane, "calibration %d: gain outside (0.7, 1.8)",
 		      cals[k]);
 		CHECK("table-monotone", monotone, "calibration %d: A g(A) "
 		      "decreases somewhere", cals[k]);
 	}
-	/* 4.x/5.x: the measured points (section 3 of sss_calibration.c). */
+	/* 4.x/5.x head-on: the measured points (section 4 of
+	 * sss_calibration.c). */
 	float al4[3] = {0.05f, 0.5f, 0.9f}, g4[3];
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, al4, g4);
-	CHECK("table4-skin", fabsf(g4[0] - 0.9036f) < 1e-6f &&
-	      fabsf(g4[1] - 0.9545f) < 1e-6f && fabsf(g4[2] - 0.9916f) < 1e-6f,
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, al4, 1.0f, g4);
+	CHECK("table4-skin", fabsf(g4[0] - 0.8975f) < 1e-6f &&
+	      fabsf(g4[1] - 0.9537f) < 1e-6f && fabsf(g4[2] - 0.9923f) < 1e-6f,
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, al4, g4);
-	CHECK("table4-rw", fabsf(g4[0] - 0.7686f) < 1e-6f &&
-	      fabsf(g4[1] - 0.8819f) < 1e-6f && fabsf(g4[2] - 0.9763f) < 1e-6f,
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, al4, 1.0f, g4);
+	CHECK("table4-rw", fabsf(g4[0] - 0.7675f) < 1e-6f &&
+	      fabsf(g4[1] - 0.8806f) < 1e-6f && fabsf(g4[2] - 0.9780f) < 1e-6f,
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
+	/* Seen at 60 degrees (mu 0.5, a row), the sign of mu ignored; past
+	 * the last row (85 degrees) held; between rows linear in mu. */
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, al4, -0.5f,
+	                     g4);
+	CHECK("table4-skin-60", fabsf(g4[0] - 1.0423f) < 1e-6f &&
+	      fabsf(g4[1] - 1.0294f) < 1e-6f && fabsf(g4[2] - 1.0077f) < 1e-6f,
+	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, al4, 0.0f,
+	                     g4);
+	CHECK("table4-skin-90", fabsf(g4[0] - 1.2665f) < 1e-6f &&
+	      fabsf(g4[1] - 1.1137f) < 1e-6f, "%g %g", (double)g4[0],
+	      (double)g4[1]);
+	float mid = 0.5f * (0.5f + 0.3420201f), g60[3], g70[3];
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, al4, mid, g4);
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, al4, 0.5f, g60);
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, al4, 0.3420201f,
+	                     g70);
+	CHECK("table4-between", fabsf(g4[1] - 0.5f * (g60[1] + g70[1])) < 1e-5f,
+	      "%g between %g and %g", (double)g4[1], (double)g60[1],
+	      (double)g70[1]);
 
+	/* 3.4: a gain of about 1.01 head-on, from the view alone beyond. */
 	float al[3] = {0.3f, 0.8f, 1.0f}, g[3];
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, al, g);
-	CHECK("table-measured", fabsf(g[0] - 1.013f) < 1e-6f &&
-	      fabsf(g[1] - 1.012f) < 1e-6f && fabsf(g[2] - 0.9225f) < 1e-6f,
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, al, 1.0f, g);
+	CHECK("table-measured", fabsf(g[0] - 1.0138f) < 1e-6f &&
+	      fabsf(g[1] - 1.0080f) < 1e-6f && fabsf(g[2] - 0.9211f) < 1e-6f,
 	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, al, NAN, g4);
+	CHECK("table-nan-view", g4[0] == g[0] && g4[1] == g[1] && g4[2] == g[2],
+	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
 	float odd[3] = {-1.0f, 2.0f, NAN};
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, odd, g);
-	CHECK("table-clamp", g[0] == 1.010f && g[1] == 0.9225f && g[2] == 1.0f,
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, odd, 1.0f, g);
+	CHECK("table-clamp", g[0] == 1.0090f && g[1] == 0.9211f && g[2] == 1.0f,
 	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
-	sss_calibration_gain(SSS_CALIBRATION_NONE, al, g);
+
+	sss_calibration_gain(SSS_CALIBRATION_NONE, al, 1.0f, g);
 	CHECK("none-is-one", g[0] == 1.0f && g[1] == 1.0f && g[2] == 1.0f,
 	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
 	CHECK_STATUS("bad-calibration", SSS_ERR_INVALID_ARGUMENT,
-	             sss_calibration_gain(7, al, g));
+	             sss_calibration_gain(7, al, 1.0f, g));
 	CHECK_STATUS("null", SSS_ERR_INVALID_ARGUMENT,
-	             sss_calibration_gain(SSS_CALIBRATION_NONE, NULL, g));
+	             sss_calibration_gain(SSS_CALIBRATION_NONE, NULL, 1.0f, g));
 }
 
 /* d / radius of m with `mapping` at each albedo a[i] against fit[i],
@@ -152,10 +186,21 @@ static void test_material(void)
 	      "%g", d[0]);
 }
 
-/* Runs sss_apply on flat passes; returns the first pixel's light. */
+/* Runs sss_apply on flat passes facing an orthographic camera; returns
+ * the middle pixel's light. */
+static sss_result run_tilted(const sss_material *m, float radius_scale,
+                             const float col[3], float light, double tilt,
+                             float out[3], int *identical);
 static sss_result run(const sss_material *m, float radius_scale,
                       const float col[3], float light, float out[3],
                       int *identical)
+{
+	return run_tilted(m, radius_scale, col, light, 0.0, out, identical);
+}
+
+static sss_result run_tilted(const sss_material *m, float radius_scale,
+                             const float col[3], float light, double tilt,
+                             float out[3], int *identical)
 {
 	float *dd = malloc(sizeof(float) * 3 * W * H);
 	float *dc = malloc(sizeof(float) * 3 * W * H);
@@ -163,9 +208,11 @@ static sss_result run(const sss_material *m, float radius_scale,
 	float *idx = malloc(sizeof(float) * W * H);
 	float *o = malloc(sizeof(float) * 3 * W * H);
 	sss_passes p;
-	flat_passes(&p, dd, dc, z, idx, light, col);
+	flat_passes(&p, dd, dc, z, idx, light, col, tilt);
 	sss_camera cam;
 	sss_camera_default(&cam);
+	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam.ortho_scale = ORTHO;
 	sss_options opt;
 	sss_options_default(&opt);
 	opt.radius_scale = radius_scale;
@@ -187,7 +234,7 @@ static void test_apply(void)
 	const float col[3] = {0.3f, 0.8f, 0.97f};
 	float g[3], out[3];
 	int same;
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, col, g);
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, col, 1.0f, g);
 	for (int t = 0; t < 2; t++) {
 		sss_material m;
 		sss_material_default(&m, SSS_PROFILE_BURLEY);
@@ -236,10 +283,92 @@ static void test_apply(void)
 	}
 }
 
+/* As the radius vanishes the gain fades continuously to 1: none at and
+ * below 1e-7 (Cycles' walk unreliable there, its diffuse BSDF below 1e-8),
+ * all of it from 1e-5 up, log-linear between; per channel, on the radius
+ * before the reach limit. */
+static void test_fade(void)
+{
+	const float col[3] = {0.05f, 0.3f, 0.8f};
+	float g[3], out[3], prev[3];
+	int same;
+	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, col, 1.0f, g);
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	memcpy(m.albedo, col, sizeof col);
+	m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+	const struct { double radius, fade; } at[] = {
+		{1e-12, 0.0}, {1e-8, 0.0}, {1e-7, 0.0}, {1e-6, 0.5},
+		{1e-5, 1.0}, {1e-3, 1.0}, {0.05, 1.0}, {1e3, 1.0}};
+	for (size_t k = 0; k < sizeof at / sizeof *at; k++) {
+		CHECK_STATUS("fade-status", SSS_OK,
+		             run(&m, (float)(at[k].radius / 0.05), col, 2.0f, out,
+		                 &same));
+		for (int c = 0; c < 3; c++) {
+			double want = 2.0 * (1.0 + at[k].fade * (g[c] - 1.0));
+			CHECK("fade-at", fabs(out[c] - want) < 4e-5,
+			      "radius %g channel %d: %g, expected %g",
+			      at[k].radius, c, (double)out[c], want);
+		}
+	}
+	/* Continuous: 16 steps a decade from 1e-9 to 1e-4 m, none jumps
+	 * more than its share of the gain's change. */
+	for (int k = 0; k <= 80; k++) {
+		double radius = 1e-9 * pow(10.0, k / 16.0);
+		run(&m, (float)(radius / 0.05), col, 2.0f, out, &same);
+		for (int c = 0; c < 3 && k > 0; c++)
+			CHECK("fade-continuous", fabsf(out[c] - prev[c]) <=
+			      2.0f * fabsf(1.0f - g[c]) / 32.0f + 4e-5f,
+			      "radius %g channel %d: %g after %g", radius, c,
+			      (double)out[c], (double)prev[c]);
+		memcpy(prev, out, sizeof out);
+	}
+	/* Per channel: only the channel below the switch loses its gain. */
+	m.radius[0] = 1e-7f;
+	m.radius[1] = m.radius[2] = 0.05f;
+	run(&m, 1.0f, col, 2.0f, out, &same);
+	CHECK("fade-channel", fabsf(out[0] - 2.0f) < 4e-5f &&
+	      fabsf(out[1] - 2.0f * g[1]) < 4e-5f &&
+	      fabsf(out[2] - 2.0f * g[2]) < 4e-5f, "%g %g %g", (double)out[0],
+	      (double)out[1], (double)out[2]);
+}
+
+/* The gain follows the angle the surface is seen at, from the Depth
+ * pass: planes turned 0 to 85 degrees get the table's gain there. */
+static void test_view(void)
+{
+	const float col[3] = {0.05f, 0.4f, 0.8f};
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	memcpy(m.albedo, col, sizeof col);
+	m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+	const double degrees[] = {0, 20, 45, 60, 75, 85};
+	for (size_t k = 0; k < sizeof degrees / sizeof *degrees; k++) {
+		double tilt = degrees[k] * 3.14159265358979 / 180.0;
+		float out[3], g[3];
+		int same;
+		CHECK_STATUS("view-status", SSS_OK,
+		             run_tilted(&m, 1.0f, col, 2.0f, tilt, out, &same));
+		sss_calibration_gain(m.calibration, col, (float)cos(tilt), g);
+		for (int c = 0; c < 3; c++)
+			CHECK("view-gain", fabsf(out[c] - 2.0f * g[c]) < 2e-4f,
+			      "%g degrees, channel %d: %g, expected %g", degrees[k],
+			      c, (double)out[c], 2.0 * g[c]);
+	}
+}
+
 int main(void)
 {
 	test_table();
 	test_material();
 	test_apply();
+	test_fade();
+	test_view();
 	return tu_finish("test_calibration");
 }

@@ -8,7 +8,7 @@ import json
 import os
 import threading
 
-ABI_VERSION = 7  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 8  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 

@@ -110,8 +110,9 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
     match_energy: BoolProperty(
         name="Match Energy", default=True,
         description="Scale the scattered light per colour channel by the "
-        "random walk's measured reflectance over the diffuse lobe's "
-        "(Random Walk materials and the Burley profile)")
+        "random walk's measured reflectance over the diffuse lobe's, for "
+        "the colour and the angle each pixel is seen at (Random Walk "
+        "materials and the Burley profile)")
     radius: FloatVectorProperty(
         name="Radius", size=3, min=0.0, soft_max=0.1, precision=5,
         subtype="NONE", unit="LENGTH",
