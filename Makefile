@@ -24,8 +24,9 @@
 #                 matter, into out/bench
 #   make compare  libsss against Cycles random walk and EEVEE on the three
 #                 bundled scenes: out/compare/SCENE/{sheet,plot}.png, results.*
-#   make sweep    how the error reduction depends on the scattering radius
-#                 (marble, mixed): out/compare/sweep/SCENE/sweep.{png,md,csv}
+#   make sweep    never worse than no SSS: every bundled scene and a
+#                 sharp-edged one, radius 1e-6x to 1e3x, against Cycles 4.5's
+#                 random walk: out/compare/sweep/SCENE/sweep.{png,md,csv}
 #   make figures  the README's picture docs/images/head.png (compare on head)
 #   make screenshots  the add-on's panels, docs/images/ui-*.png (Xvfb, 3.4)
 #   make clean    remove build/
@@ -240,22 +241,25 @@ compare: deps all
 		>out/compare/summary.txt
 	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,results.csv,results.md} and out/compare/summary.txt"
 
-# Where screen-space scattering stops matching the random walk: the bundled
-# marble and mixed scenes with every Subsurface scaled from 0.5x to 64x
+# Never worse than no SSS: every bundled scene and the sharp-edged block
+# with every Subsurface scaled from 1e-6x to 1e3x, against the random walk
+# of the Blender artists use (4.5 LTS; SWEEP_BLENDER=blender for 3.4)
 # (blender_scripts/sweep_radius.py): out/compare/sweep/SCENE/sweep.{png,md,csv}.
-SWEEP_SCENES ?= marble mixed
-SWEEP_ARGS ?= --scales 0.5,1,2,4,8,16,32,64
-sweep: deps all
+SWEEP_SCENES ?= head marble mixed block
+SWEEP_ARGS ?=
+SWEEP_BLENDER ?= $(word 1,$(BPY_BLENDERS))
+sweep: deps all $(filter $(BUILD)/%,$(SWEEP_BLENDER))
 	@mkdir -p out/compare/sweep $(BUILD)/compare
 	@for kind in $(SWEEP_SCENES); do \
 		log=$(BUILD)/compare/sweep_$$kind.log; \
-		$(BLENDER) -b --factory-startup --python-exit-code 1 \
+		$(SWEEP_BLENDER) -b --factory-startup --python-exit-code 1 \
 			--python blender_scripts/build_scene.py -- --kind $$kind \
-			--out $(BUILD)/compare/$$kind.blend >$$log 2>&1 && \
-		SSS_LIB=$(abspath $(BUILD))/libsss.so $(BLENDER) -b --factory-startup \
+			--out $(BUILD)/compare/sweep_$$kind.blend >$$log 2>&1 && \
+		SSS_LIB=$(abspath $(BUILD))/libsss.so $(SWEEP_BLENDER) -b --factory-startup \
 			--python-exit-code 1 --python blender_scripts/sweep_radius.py -- \
-			--scene $(BUILD)/compare/$$kind.blend \
-			--out out/compare/sweep/$$kind $(SWEEP_ARGS) >>$$log 2>&1 \
+			--scene $(BUILD)/compare/sweep_$$kind.blend \
+			--name $$kind --out out/compare/sweep/$$kind $(SWEEP_ARGS) \
+			>>$$log 2>&1 \
 			|| { tail -n 40 $$log; exit 1; }; \
 		grep -E '^sweep' $$log; \
 	done

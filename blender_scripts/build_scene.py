@@ -17,6 +17,9 @@ KIND:
          light (compare.py's second bundled scene)
   mixed  a skin sphere and a jade bangle (two profiles) behind a grey,
          non-scattering pillar, side and back light (the third)
+  block  wax blocks with sharp edges and corners (no bevel), seen
+         three faces at a time and lit across an edge: light enters one
+         face and leaves the next (the sweep's fourth scene)
   slab   a thin (1.5 cm) random-walk skin slab facing the camera, lit only
          from behind (back-lit transmission's test)
 Rendering is Cycles at low resolution and samples; denoising and light
@@ -40,7 +43,7 @@ def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="build_scene.py")
     p.add_argument("--kind", choices=("demo", "head", "two", "none", "marble", "mixed",
-                                            "slab"), required=True)
+                                            "block", "slab"), required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--samples", type=int, default=8)
@@ -287,6 +290,36 @@ def build_mixed(scene):
     place_camera(scene, (0.0, -2.5, 0.8), (0.0, 0.3, 0.45), 50)
 
 
+def build_block(scene):
+    """Two wax blocks with sharp (unbevelled) edges and corners: a 40 cm
+    cube turned 35 degrees from the camera and a 16 cm thick bar beside
+    it, so that three faces of each show. A hard key light from above and
+    to the left lights the top faces and one side each; the other sides
+    see only the world and the floor, so the light the random walk carries
+    round an edge, from a lit face to a dark one, is most of what they
+    show. The wax scatters over about a tenth of the cube's side (red
+    4 cm) and a quarter of the bar's thickness."""
+    wax = random_walk(material("Wax", **{
+        "base": (0.85, 0.75, 0.55, 1.0), "subsurface": 0.04,
+        "radius": (1.0, 0.7, 0.45),
+        "subsurface_color": (0.9, 0.75, 0.5, 1.0), "roughness": 0.35}))
+    floor = material("Floor", **{"base": (0.1, 0.1, 0.11, 1.0),
+                                 "roughness": 0.8})
+    bpy.ops.mesh.primitive_cube_add(size=0.4, location=(-0.22, 0.2, 0.2),
+                                    rotation=(0, 0, math.radians(35)))
+    assign(bpy.context.active_object, wax)
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.3, -0.05, 0.13),
+                                    rotation=(0, 0, math.radians(-20)))
+    bar = bpy.context.active_object
+    bar.scale = (0.16, 0.5, 0.26)
+    assign(bar, wax)
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    assign(bpy.context.active_object, floor)
+    light("SUN", "Key", 4.0, (-2.0, -1.2, 3.0), target=(0, 0.1, 0.2),
+          angle=1.0)
+    place_camera(scene, (0.35, -1.9, 1.05), (0.0, 0.1, 0.17), 50)
+
+
 def build_slab(scene):
     """A thin skin slab (1.5 cm) facing the camera, lit only from behind by
     an area light: its front glows only through transmission."""
@@ -315,6 +348,8 @@ def main():
         build_marble(scene)
     elif args.kind == "mixed":
         build_mixed(scene)
+    elif args.kind == "block":
+        build_block(scene)
     elif args.kind == "slab":
         build_slab(scene)
     else:

@@ -1,11 +1,11 @@
-"""Where screen-space scattering stops matching the random walk: one scene
-rendered with every scattering material's Subsurface (its radius) scaled
-by each of a range of factors, headless.
+"""Never worse than no SSS, from a vanishing radius to one far larger than
+the objects: one scene rendered with every scattering material's
+Subsurface (its radius) scaled by each of a range of factors, headless.
 
     blender -b --python-exit-code 1 --python blender_scripts/sweep_radius.py \\
-        -- --scene SCENE.blend --out DIR [--scales 0.25,0.5,1,2,4,8]
-        [--resolution 160x120] [--ref-samples 256] [--samples 16,64]
-        [--name NAME]
+        -- --scene SCENE.blend --out DIR [--scales 1e-6,1e-4,...,1e3]
+        [--resolution 160x120] [--ref-samples 256] [--samples 64]
+        [--name NAME] [--keep-work]
 
 For each scale, in this one run: Cycles' random walk at --ref-samples
 (the reference: two renders of half as many samples with two other seeds,
@@ -16,17 +16,20 @@ pixels against the noise-free image the reference estimates (its own
 noise taken out), at full and at quarter resolution (where the renders'
 noise averages away and the bias stays).
 
-Writes into DIR: sweep.csv, sweep.md (one row per scale and sample
+Writes into DIR (and with --keep-work each scale's renders and scene
+descriptions into DIR/work/xSCALE): sweep.csv, sweep.md (one row per scale and sample
 count: the largest radius in metres, the kernel's half-width in pixels on
-the nearest scattering object, both errors without and with our method
-and how much less error ours has) and sweep.png (that error reduction
-against the kernel's width, full and quarter resolution).
+the nearest scattering object, both errors without and with our method,
+their ratio at quarter resolution (never worse: at most 1), how far ours
+is from the render without SSS, and the random walk's mean over that
+render's per channel) and sweep.png (both errors and their ratio against
+the scale, the never-worse line drawn).
 
 Screen space sees one side of each object: once light scatters about as
 far as the objects are thick, the random walk carries it through them and
-out of sides the camera does not see, which no screen-space method models.
-This sweep shows where, for the scene's geometry and lights. The .blend is
-opened, never saved.
+out of sides the camera does not see. The sweep shows what that does to
+the error for the scene's geometry and lights. The .blend is opened,
+never saved.
 """
 import argparse
 import csv
@@ -45,7 +48,9 @@ from script_cli import run_main, script_argv  # noqa: E402
 
 COLUMNS = ("scene", "scale", "radius_m", "kernel_px", "samples",
            "rmse_no_sss", "rmse_ours", "cut", "rmse_q_no_sss",
-           "rmse_q_ours", "cut_q", "render_s", "post_s")
+           "rmse_q_ours", "cut_q", "ratio_q", "ours_vs_plain",
+           "rw_over_plain", "render_s", "post_s")
+DEFAULT_SCALES = "1e-6,1e-4,1e-2,0.1,0.3,1,3,10,100,1000"
 
 
 def log(*a):
@@ -58,10 +63,13 @@ def parse_args():
     p.add_argument("--scene", required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--name")
-    p.add_argument("--scales", default="0.25,0.5,1,2,4,8")
+    p.add_argument("--scales", default=DEFAULT_SCALES)
     p.add_argument("--resolution", default="160x120")
     p.add_argument("--ref-samples", type=int, default=256)
-    p.add_argument("--samples", default="16,64")
+    p.add_argument("--samples", default="64")
+    p.add_argument("--keep-work", action="store_true",
+                   help="keep each scale's renders and scene descriptions "
+                        "in DIR/work/xSCALE")
     args = p.parse_args(argv)
     try:
         args.scales = sorted({float(x) for x in args.scales.split(",")})
@@ -141,11 +149,44 @@ def one_scale(args, scale, default_code, work):
                          kernel_px=kernel, samples=n, rmse_no_sss=e0,
                          rmse_ours=e1, cut=_cut(e0, e1), rmse_q_no_sss=q0,
                          rmse_q_ours=q1, cut_q=_cut(q0, q1),
+                         ratio_q=_ratio(q1, q0),
+                         ours_vs_plain=relative_difference(ours, base, mask),
+                         rw_over_plain=mean_ratio(ref, base, mask),
                          render_s=seconds, post_s=t["scatter"]))
         log(f"scale {scale:g} ({radius:.4g} m, {kernel:.1f} px) {n} spp: "
             f"RMSE {e0:.4g} -> {e1:.4g} ({rows[-1]['cut']:.1f} % less), "
-            f"quarter {q0:.4g} -> {q1:.4g} ({rows[-1]['cut_q']:.1f} % less)")
+            f"quarter {q0:.4g} -> {q1:.4g} ({rows[-1]['cut_q']:.1f} % less)"
+            f"; ours vs no SSS {rows[-1]['ours_vs_plain']:.3g}, random walk "
+            f"over no SSS {rows[-1]['rw_over_plain']}")
     return rows
+
+
+def relative_difference(img, base, mask):
+    """The largest per-pixel, per-channel |img - base| over the scattering
+    pixels, relative to base (floored at 1 % of base's mean there, so that
+    black pixels do not divide by zero): 0 where ours is the render
+    without SSS."""
+    import numpy as np
+    a, b = img[mask].astype(np.float64), base[mask].astype(np.float64)
+    floor = 0.01 * max(float(np.mean(np.abs(b))), 1e-12)
+    return float(np.max(np.abs(a - b) / np.maximum(np.abs(b), floor)))
+
+
+def mean_ratio(ref, base, mask):
+    """The random walk's mean over the scattering pixels over the render
+    without SSS's, per channel, as "r/g/b"."""
+    import numpy as np
+    r = ref[mask].astype(np.float64).mean(axis=0)
+    b = base[mask].astype(np.float64).mean(axis=0)
+    return "/".join(f"{x / y:.3f}" if y > 0 else "nan" for x, y in zip(r, b))
+
+
+def _ratio(ours, without):
+    """ours / without, where both 0 (ours is the render without SSS and
+    that render is already the random walk's) reads 1."""
+    if without > 0:
+        return ours / without
+    return 1.0 if ours == 0 else float("inf")
 
 
 def _cut(before, after):
@@ -167,42 +208,82 @@ def write(args, rows):
              f"{args.ref_samples} spp (two halves, other seeds); RMSE over the "
              "scattering pixels with the reference's own noise taken out "
              "(compare.py's rmse_c), `_q` at quarter resolution; `cut`: % less "
-             "error with our default method than without SSS. `radius_m`: "
-             "the largest Subsurface x Subsurface Radius; `kernel_px`: the "
-             "kernel's half-width on the nearest scattering object.", "",
+             "error with our default method than without SSS, `ratio_q` "
+             "the quarter-resolution errors' ratio (never worse: at most "
+             "1). `radius_m`: the largest Subsurface x Subsurface Radius; "
+             "`kernel_px`: the kernel's half-width on the nearest "
+             "scattering object; `ours_vs_plain`: the largest relative "
+             "difference of ours from the render without SSS; "
+             "`rw_over_plain`: the random walk's mean over that render's, "
+             "per channel.", "",
              "| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
     lines += ["| " + " | ".join(fmt(r[c]) for c in COLUMNS) + " |"
               for r in rows]
-    lines += ["", "![error reduction against kernel width](sweep.png)", ""]
+    lines += ["", verdict(rows), "",
+              "![errors and their ratio against the scale](sweep.png)", ""]
     with open(os.path.join(args.out, "sweep.md"), "w") as f:
         f.write("\n".join(lines))
+
+
+# Equal errors count as never worse: where ours is the render without SSS
+# recombined from its passes, the two differ by float rounding only.
+EQUAL = 1e-3
+
+
+def verdict(rows):
+    """One line: whether ours is never worse than no SSS at quarter
+    resolution, and where it is closest to (or past) the line."""
+    worst = max(rows, key=lambda r: r["ratio_q"])
+    ok = all(r["ratio_q"] <= 1.0 + EQUAL for r in rows)
+    return (f"Never worse than no SSS at quarter resolution: "
+            f"{'yes' if ok else 'no'} (largest ratio {worst['ratio_q']:.3f} "
+            f"at x{worst['scale']:g}, {worst['samples']} spp).")
 
 
 def plot(args, rows, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
-    for ax, key, title in ((axes[0], "cut", "full resolution"),
-                           (axes[1], "cut_q", "quarter resolution (bias)")):
-        for n in args.samples:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    ax = axes[0]
+    for n in args.samples:
+        rs = sorted((r for r in rows if r["samples"] == n),
+                    key=lambda r: r["scale"])
+        x = [r["scale"] for r in rs]
+        line, = ax.plot(x, [r["rmse_q_no_sss"] for r in rs], "s--",
+                        label=f"no SSS, {n} spp")
+        ax.plot(x, [r["rmse_q_ours"] for r in rs], "o-",
+                color=line.get_color(), label=f"no SSS {n} spp + ours")
+        for r in rs:
+            ax.annotate(f"{r['kernel_px']:.2g} px",
+                        (r["scale"], r["rmse_q_ours"]), fontsize=6,
+                        xytext=(3, 3), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylabel("RMSE against the random walk, quarter resolution\n"
+                  f"(reference {args.ref_samples} spp, its noise removed)")
+    ax.set_title(f"{args.name}: error (labels: kernel half-width)")
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    for n in args.samples:
+        for key, style, what in (("ratio_q", "o-", "quarter resolution"),
+                                 (None, "^:", "full resolution")):
             rs = sorted((r for r in rows if r["samples"] == n),
                         key=lambda r: r["scale"])
-            ax.plot([r["kernel_px"] for r in rs], [r[key] for r in rs], "o-",
-                    label=f"SSS off {n} spp + ours")
-            for r in rs:
-                ax.annotate(f"x{r['scale']:g}", (r["kernel_px"], r[key]),
-                            fontsize=6, xytext=(3, 3),
-                            textcoords="offset points")
-        ax.axhline(0, color="k", lw=0.8)
-        ax.axhline(30, color="grey", ls=":", lw=0.8)
-        ax.set_xscale("log")
-        ax.set_xlabel("kernel half-width on the nearest object, px")
-        ax.set_title(f"{args.name}: {title}")
+            y = [r[key] if key else (r["rmse_ours"] / r["rmse_no_sss"]
+                                     if r["rmse_no_sss"] > 0 else float("nan"))
+                 for r in rs]
+            ax.plot([r["scale"] for r in rs], y, style,
+                    label=f"{n} spp, {what}")
+    ax.axhline(1.0, color="r", lw=1.2, label="never worse: at most 1")
+    ax.axhline(0.7, color="grey", ls=":", lw=0.8, label="30 % less error")
+    ax.set_xscale("log")
+    ax.set_ylabel("error with ours / error without SSS")
+    ax.set_title(f"{args.name}: ratio")
+    ax.legend(fontsize=7)
+    for ax in axes:
+        ax.set_xlabel("Subsurface scale (x the scene's radius)")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0].set_ylabel("% less error than without SSS\n(vs random walk "
-                       f"{args.ref_samples} spp, its noise removed)")
-    axes[1].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -229,12 +310,16 @@ def main():
         f"{args.samples}, method {default}")
     rows = []
     for scale in args.scales:
-        rows += one_scale(args, scale, codes[default], work)
+        work_scale = os.path.join(work, f"x{scale:g}")
+        os.makedirs(work_scale, exist_ok=True)
+        rows += one_scale(args, scale, codes[default], work_scale)
     write(args, rows)
     plot(args, rows, os.path.join(args.out, "sweep.png"))
-    import shutil
-    shutil.rmtree(work, ignore_errors=True)
+    if not args.keep_work:
+        import shutil
+        shutil.rmtree(work, ignore_errors=True)
     separable_sss.unregister()
+    log(verdict(rows))
     log(f"wrote {args.out}/sweep.csv, sweep.md, sweep.png "
         f"({time.perf_counter() - t0:.0f} s)")
 

@@ -97,7 +97,8 @@ def test_compare_quick(tmp_path):
 
 def test_sweep_radius(tmp_path):
     """blender_scripts/sweep_radius.py on two scales at a tiny size: one
-    row per scale and sample count, radii scaled, a plot."""
+    row per scale and sample count, radii scaled, a plot; at a vanishing
+    radius ours is the render without SSS."""
     blend = build_blend(SCENE, str(tmp_path / f"{SCENE}.blend"))
     out = tmp_path / "sweep"
     env = dict(os.environ, SSS_LIB=os.path.join(BUILD, "libsss.so"))
@@ -105,19 +106,27 @@ def test_sweep_radius(tmp_path):
         [BLENDER, "-b", "--factory-startup", "--python-exit-code",
          "1", "--python", os.path.join(ROOT, "blender_scripts",
                                        "sweep_radius.py"),
-         "--", "--scene", blend, "--out", str(out), "--scales", "0.5,4",
+         "--", "--scene", blend, "--out", str(out), "--scales", "1e-9,4",
          "--resolution", "64x48", "--ref-samples", "256", "--samples", "8"],
         capture_output=True, text=True, timeout=300, env=env)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     rows = _rows(out / "sweep.csv")
     assert [(float(r["scale"]), int(r["samples"])) for r in rows] == \
-        [(0.5, 8), (4.0, 8)]
+        [(1e-9, 8), (4.0, 8)]
     small, large = rows
     assert float(large["radius_m"]) == \
-        pytest.approx(8 * float(small["radius_m"]), rel=2e-3)
-    assert float(large["kernel_px"]) > float(small["kernel_px"]) > 0
+        pytest.approx(4e9 * float(small["radius_m"]), rel=2e-3)
+    assert float(large["kernel_px"]) > float(small["kernel_px"]) >= 0
     for r in rows:
         assert float(r["rmse_no_sss"]) > 0 and float(r["rmse_ours"]) > 0
+        assert float(r["ratio_q"]) == pytest.approx(
+            float(r["rmse_q_ours"]) / float(r["rmse_q_no_sss"]), rel=2e-3)
+        assert len(r["rw_over_plain"].split("/")) == 3
+    # No blur, no calibration, no back light: the render without SSS,
+    # recombined from its passes.
+    assert float(small["ours_vs_plain"]) < 1e-3
+    assert float(large["ours_vs_plain"]) > 0.1
+    assert "Never worse than no SSS" in (out / "sweep.md").read_text()
     assert (out / "sweep.png").stat().st_size > 1000
     assert not (out / "work").exists()
 
