@@ -246,12 +246,12 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 			                       pixel's colour and view
 			                       (sss_calibration.c) */
 				const sss_material *m = &materials[slot[i]];
-				float mu = sss__calibration_needs_view(m)
+				const float *fade = kernels[slot[i]].calibration_fade;
+				float mu = sss__calibration_needs_view(m, fade)
 				           ? sss__view_cosine(&p->depth, slot, ctx->proj,
 				                              w, ctx->h, x, y)
 				           : 1.0f;
-				sss__calibration_apply(m, kernels[slot[i]].calibration_fade,
-				                       mu, col, light);
+				sss__calibration_apply(m, fade, mu, col, light);
 			}
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +

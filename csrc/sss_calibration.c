@@ -265,22 +265,25 @@ static float lerp_table(const float *table, float a)
 	return table[i - 1] + t * (table[i] - table[i - 1]);
 }
 
-/* g(A) with the reflectance A g(A), not g, interpolated linearly: where
- * the walk's reflectance levels off (g ~ 1/A) a linear g would overshoot
- * between the points and A g(A) would fall again. Below the first
- * point g is its value; NaN gives 1. */
-static float gain_at(const float *table, float a)
+/* g(A) on the table between rows r0 and r1 (tv of the way to r1), with
+ * the reflectance A g(A), not g, interpolated linearly: where the walk's
+ * reflectance levels off (g ~ 1/A) a linear g would overshoot between the
+ * points and A g(A) would fall again. Below the first point g is its
+ * value; NaN gives 1. */
+static float gain_at(const float *r0, const float *r1, float tv, float a)
 {
+#define ROW(k) (r0[k] + tv * (r1[k] - r0[k]))
 	if (!isfinite(a))
 		return 1.0f;
 	if (a <= cal_albedo[1])
-		return table[1];
+		return ROW(1);
 	if (a >= 1.0f)
-		return table[CAL_N - 1];
+		return ROW(CAL_N - 1);
 	float t;
 	int i = interval(a, 2, &t);
-	float r0 = cal_albedo[i - 1] * table[i - 1], r1 = cal_albedo[i] * table[i];
-	return (r0 + t * (r1 - r0)) / a;
+	float q0 = cal_albedo[i - 1] * ROW(i - 1), q1 = cal_albedo[i] * ROW(i);
+	return (q0 + t * (q1 - q0)) / a;
+#undef ROW
 }
 
 static int is_calibration(int32_t calibration)
@@ -289,22 +292,24 @@ static int is_calibration(int32_t calibration)
 	       calibration <= SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
 }
 
-/* g at albedo a seen at view cosine mu: linear in mu between the rows
- * (clamped to the measured 0 .. 85 degrees), each row gain_at. */
-static float gain_seen(int32_t calibration, float a, float mu)
+/* The rows around view cosine mu and mu's place between them: g is
+ * linear in mu there (clamped to the measured 0 .. 85 degrees; NaN is
+ * head-on). */
+static int view_rows(float mu, float *tv)
 {
-	const float (*rows)[CAL_N] = cal_gain[calibration];
+	*tv = 0.0f;
 	if (!(mu < 1.0f))
-		return gain_at(rows[0], a); /* also NaN: head-on */
-	if (mu <= cal_view_cosine[VIEW_N - 1])
-		return gain_at(rows[VIEW_N - 1], a);
-	int i = 1;
-	while (cal_view_cosine[i] > mu)
-		i++;
-	float t = (cal_view_cosine[i - 1] - mu) /
-	          (cal_view_cosine[i - 1] - cal_view_cosine[i]);
-	float g0 = gain_at(rows[i - 1], a), g1 = gain_at(rows[i], a);
-	return g0 + t * (g1 - g0);
+		return 0;
+	if (mu <= cal_view_cosine[VIEW_N - 1]) {
+		*tv = 1.0f;
+		return VIEW_N - 2;
+	}
+	int v = 0;
+	while (cal_view_cosine[v + 1] > mu)
+		v++;
+	*tv = (cal_view_cosine[v] - mu) /
+	      (cal_view_cosine[v] - cal_view_cosine[v + 1]);
+	return v;
 }
 
 sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
@@ -314,10 +319,13 @@ sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
 		return SSS_ERR_INVALID_ARGUMENT;
 	if (calibration != SSS_CALIBRATION_NONE && !is_calibration(calibration))
 		return SSS_ERR_INVALID_ARGUMENT;
-	float mu = fabsf(view_cosine);
+	float tv;
+	int v = view_rows(fabsf(view_cosine), &tv);
 	for (int c = 0; c < 3; c++)
 		gain[c] = is_calibration(calibration)
-		          ? gain_seen(calibration, albedo[c], mu) : 1.0f;
+		          ? gain_at(cal_gain[calibration][v],
+		                    cal_gain[calibration][v + 1], tv, albedo[c])
+		          : 1.0f;
 	return SSS_OK;
 }
 
@@ -326,16 +334,19 @@ sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
  * gain jumps to 1 there. On the world-lit slab of section 3 (Random Walk
  * (Skin), 4.5.15) the walk's energy is g(A) at every radius from 2e-8 to
  * 1e-2 m (A = 0.3 / 0.5 / 0.8: 0.925 / 0.960 / 0.993, within 3e-4), but on
- * the bundled scenes, lit by lamps, it is not: at 1e-6 times their radius
- * (1e-8 to 1.1e-7 m) it returns 0.35 - 0.68 of the diffuse render's light,
- * at 1e-4 times (1e-6 to 1.1e-5 m) 0.88 - 1.0, and from there up the gain
- * of the slab, seen at each pixel's angle, cuts the error of the render
- * without SSS by half (make sweep). So the gain applies in full from a
- * radius of 1e-5, not at all at 1e-7 and below, log-linear between: the
- * output tends continuously to the render without SSS as the radius
- * vanishes, and does not follow the walk where it is unreliable. */
-#define CALIBRATION_NONE_BELOW 1e-7
-#define CALIBRATION_FULL_FROM 1e-5
+ * the bundled scenes it is not, and the loss depends on where the object
+ * is: at 1e-6 times their radius (1e-8 to 1.1e-7 m) the walk returns 0.35 -
+ * 0.68 of the diffuse render's light, at 1e-4 times (1e-6 to 1.1e-5 m) 0.88
+ * - 1.0; the block scene at 1e-4 times (4e-6 m) returns 0.88 / 0.93 / 0.97
+ * where it stands, 0.47 / 0.51 / 0.54 moved 100 m from the world's origin.
+ * A float precision limit of the walk, then: its steps come near the
+ * spacing of the positions' floats (6e-8 m at 1 m, 8e-6 m at 100 m). So
+ * the gain applies in full from a radius of 1e-3 (a thousand spacings up to
+ * 100 m from the origin), not at all at 1e-5 and below, log-linear between
+ * (every gain there made that block worse than no SSS): the output tends
+ * continuously to the render without SSS as the radius vanishes. */
+#define CALIBRATION_NONE_BELOW 1e-5
+#define CALIBRATION_FULL_FROM 1e-3
 
 float sss__calibration_fade(double radius)
 {
@@ -346,9 +357,11 @@ float sss__calibration_fade(double radius)
 	return f >= 1.0 ? 1.0f : (float)f;
 }
 
-int sss__calibration_needs_view(const sss_material *mat)
+int sss__calibration_needs_view(const sss_material *mat,
+                                const float fade[3])
 {
-	return is_calibration(mat->calibration);
+	return is_calibration(mat->calibration) && mat->strength > 0.0f &&
+	       (fade[0] > 0.0f || fade[1] > 0.0f || fade[2] > 0.0f);
 }
 
 void sss__calibration_apply(const sss_material *mat, const float fade[3],
@@ -357,13 +370,15 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
 {
 	if (!is_calibration(mat->calibration))
 		return;
-	float s = mat->strength;
+	float s = mat->strength, tv;
+	int v = view_rows(view_cosine, &tv);
+	const float *r0 = cal_gain[mat->calibration][v];
+	const float *r1 = cal_gain[mat->calibration][v + 1];
 	for (int c = 0; c < 3; c++) {
 		float m = (mat->kind == SSS_PROFILE_JIMENEZ
 		           ? s * mat->jimenez_strength[c] : s) * fade[c];
 		if (m > 0.0f)
-			light[c] *= 1.0f + m * (gain_seen(mat->calibration,
-			                                  diff_col[c], view_cosine) -
+			light[c] *= 1.0f + m * (gain_at(r0, r1, tv, diff_col[c]) -
 			                        1.0f);
 	}
 }

@@ -107,13 +107,17 @@ void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
 	out[2] = z;
 }
 
-/* The view-space point of pixel (x, y) at planar depth z. */
-static void unproject(const sss__projection *p, int32_t x, int32_t y,
-                      double z, double out[3])
+/* The view cosine is computed in pixel-scaled view space, X' = fx X,
+ * Y' = fy Y, Z' = Z, where a pixel's point needs no division: a tangent
+ * t' maps back as t = S t' with S = diag(1/fx, 1/fy, 1), so the normal is
+ * N = diag(fx, fy, 1) N' (up to det S) and N.V = N'.V' (perspective,
+ * V = the point) up to the same factor. */
+static void scaled_point(const sss__projection *p, int32_t x, int32_t y,
+                         double z, double out[3])
 {
 	double scale = p->ortho ? 1.0 : z;
-	out[0] = (x + 0.5 - p->cx) / p->fx * scale;
-	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
+	out[0] = (x + 0.5 - p->cx) * scale;
+	out[1] = (p->cy - (y + 0.5)) * scale;
 	out[2] = z;
 }
 
@@ -122,23 +126,23 @@ static void unproject(const sss__projection *p, int32_t x, int32_t y,
  * slope), from neighbours of the same slot only; 0 when neither is. */
 static int surface_step(const sss_image *depth, const int16_t *slot,
                         const sss__projection *p, int32_t w, int32_t h,
-                        int32_t x, int32_t y, int dx, int dy, double z,
-                        double step[3])
+                        int32_t x, int32_t y, int dx, int dy,
+                        const double here[3], double step[3])
 {
-	double best = INFINITY, here[3];
+	double best = INFINITY;
 	int found = 0;
+	int16_t own = slot[(size_t)y * w + x];
 	for (int side = -1; side <= 1; side += 2) {
 		int32_t nx = x + side * dx, ny = y + side * dy;
 		if (nx < 0 || ny < 0 || nx >= w || ny >= h ||
-		    slot[(size_t)ny * w + nx] != slot[(size_t)y * w + x])
+		    slot[(size_t)ny * w + nx] != own)
 			continue;
 		double nz = sss__at(depth, nx, ny)[0];
-		if (!(fabs(nz - z) < best))
+		if (!(fabs(nz - here[2]) < best))
 			continue;
-		best = fabs(nz - z);
+		best = fabs(nz - here[2]);
 		double there[3];
-		unproject(p, x, y, z, here);
-		unproject(p, nx, ny, nz, there);
+		scaled_point(p, nx, ny, nz, there);
 		for (int c = 0; c < 3; c++)
 			step[c] = side * (there[c] - here[c]);
 		found = 1;
@@ -150,23 +154,30 @@ float sss__view_cosine(const sss_image *depth, const int16_t *slot,
                        const sss__projection *p, int32_t w, int32_t h,
                        int32_t x, int32_t y)
 {
-	double z = sss__at(depth, x, y)[0], sx[3], sy[3], pos[3];
-	if (!surface_step(depth, slot, p, w, h, x, y, 1, 0, z, sx) ||
-	    !surface_step(depth, slot, p, w, h, x, y, 0, 1, z, sy))
+	double here[3], sx[3], sy[3];
+	scaled_point(p, x, y, sss__at(depth, x, y)[0], here);
+	if (!surface_step(depth, slot, p, w, h, x, y, 1, 0, here, sx) ||
+	    !surface_step(depth, slot, p, w, h, x, y, 0, 1, here, sy))
 		return 1.0f;
-	double n[3] = {sx[1] * sy[2] - sx[2] * sy[1],
-	               sx[2] * sy[0] - sx[0] * sy[2],
-	               sx[0] * sy[1] - sx[1] * sy[0]};
-	unproject(p, x, y, z, pos);
-	double v[3] = {0.0, 0.0, 1.0}; /* towards the camera, up to sign */
-	if (!p->ortho)
-		for (int c = 0; c < 3; c++)
-			v[c] = pos[c];
-	double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-	double vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-	if (!(nn > 0.0 && vv > 0.0) || !isfinite(nn * vv))
+	/* N' = sx x sy; N = (fx N'x, fy N'y, N'z) */
+	double nx = sx[1] * sy[2] - sx[2] * sy[1];
+	double ny = sx[2] * sy[0] - sx[0] * sy[2];
+	double nz = sx[0] * sy[1] - sx[1] * sy[0];
+	double fx = p->fx, fy = p->fy;
+	double nn = fx * fx * nx * nx + fy * fy * ny * ny + nz * nz;
+	double dot, vv; /* N.V and |V|^2, both times fx fy (resp. its square) */
+	if (p->ortho) { /* V = (0, 0, 1) */
+		dot = nz * fx * fy;
+		vv = fx * fx * fy * fy;
+	} else {        /* V = (X'/fx, Y'/fy, Z) */
+		dot = nx * here[0] + ny * here[1] + nz * here[2];
+		dot *= fx * fy;
+		vv = here[0] * here[0] * fy * fy + here[1] * here[1] * fx * fx +
+		     here[2] * here[2] * fx * fx * fy * fy;
+	}
+	double den = nn * vv;
+	if (!(den > 0.0) || !isfinite(den) || !isfinite(dot))
 		return 1.0f;
-	double mu = fabs(n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) /
-	            sqrt(nn * vv);
+	double mu = fabs(dot) / sqrt(den);
 	return mu < 1.0 ? (float)mu : 1.0f;
 }

@@ -98,14 +98,16 @@ double sss__cycles_rw_d_over_radius(double albedo);
 double sss__cycles4_rw_d_over_radius(double albedo);
 /* How much of the energy calibration applies to a channel whose radius
  * (Burley: Subsurface Radius x Scale; other profiles: their support / 16)
- * is `radius` scene units: 1 from 1e-5 up, 0 at and below 1e-7 (where
- * Cycles' walk is unreliable, and below 1e-8 its diffuse BSDF), log-linear
+ * is `radius` scene units: 1 from 1e-3 up, 0 at and below 1e-5 (where
+ * Cycles' walk loses light to float precision, and below 1e-8 renders its
+ * diffuse BSDF), log-linear
  * between, so the output tends continuously to the uncalibrated blur,
  * itself the identity there. */
 float sss__calibration_fade(double radius);
-/* Whether the material's gain depends on the view (then
- * sss__view_cosine is worth computing). */
-int sss__calibration_needs_view(const sss_material *mat);
+/* Whether the material's gain is applied at all, and so depends on the
+ * view (then sss__view_cosine is worth computing). */
+int sss__calibration_needs_view(const sss_material *mat,
+                                const float fade[3]);
 void sss__calibration_apply(const sss_material *mat, const float fade[3],
                             float view_cosine, const float *diff_col,
                             float *light);

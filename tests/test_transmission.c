@@ -584,6 +584,62 @@ static void test_baked_scale(void)
 	      NULL, "%s", err);
 }
 
+/* As the radius vanishes, every model's output goes to the render without
+ * SSS (radius_scale 0), transmission and calibration included: a slab
+ * 5 mm thick, lit in front and from behind. */
+static void test_vanishing_radius(void)
+{
+	static const int32_t models[] = {SSS_TRANSMISSION_BURLEY,
+	                                 SSS_TRANSMISSION_JIMENEZ,
+	                                 SSS_TRANSMISSION_BEER_LAMBERT,
+	                                 SSS_TRANSMISSION_FAST};
+	static const float scales[] = {1.0f, 1e-2f, 1e-4f, 1e-6f, 1e-9f};
+	static float plain[W * H * 3];
+	char err[256];
+	for (int k = 0; k < 4; k++) {
+		sss_material m = skin(models[k], 0.01f);
+		m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+		m.transmission_distance = 0.02f;
+		/* Beer-Lambert's colour at the distance: white would absorb
+		 * nothing at any distance (no length to scale; see
+		 * docs/transmission.md) */
+		m.transmission_color[0] = 0.9f;
+		m.transmission_color[1] = 0.6f;
+		m.transmission_color[2] = 0.4f;
+		slab_make(&S, 1.0f, 0.005f);
+		for (int i = 0; i < W * H * 3; i++)
+			S.dd[i] = 0.3f;
+		CHECK_STATUS("vanish.plain", SSS_OK, run(&S, &m, 0.0f, err,
+		                                         sizeof err));
+		memcpy(plain, S.out, sizeof plain);
+		double prev = INFINITY;
+		for (int j = 0; j < 5; j++) {
+			slab_make(&S, 1.0f, 0.005f);
+			for (int i = 0; i < W * H * 3; i++)
+				S.dd[i] = 0.3f;
+			CHECK_STATUS("vanish.run", SSS_OK, run(&S, &m, scales[j], err,
+			                                       sizeof err));
+			double worst = 0.0;
+			for (int i = 0; i < W * H * 3; i++)
+				worst = fmax(worst, fabs(S.out[i] - plain[i]) / plain[i]);
+			/* At the scene's radius the back light shows; then it
+			 * fades, never growing again as the radius shrinks. */
+			if (j == 0)
+				CHECK("vanish.transmits", worst > 0.05,
+				      "model %d: %g", models[k], worst);
+			CHECK("vanish.monotone", worst <= prev + 1e-6,
+			      "model %d at %g: %g after %g", models[k],
+			      (double)scales[j], worst, prev);
+			if (scales[j] <= 1e-4f)
+				CHECK("vanish.plain-1e-3", worst <= 1e-3,
+				      "model %d at %g (radius %g m): %g from plain",
+				      models[k], (double)scales[j],
+				      0.01 * scales[j], worst);
+			prev = worst;
+		}
+	}
+}
+
 static void test_scene_json(void)
 {
 	const char *json =
@@ -801,6 +857,7 @@ int main(void)
 	test_extremes();
 	test_validation();
 	test_baked_scale();
+	test_vanishing_radius();
 	test_scene_json();
 	test_process();
 	return tu_finish("test_transmission");
