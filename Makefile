@@ -27,6 +27,7 @@
 #   make sweep    never worse than no SSS: every bundled scene and a
 #                 sharp-edged one, radius 1e-6x to 1e3x, against Cycles 4.5's
 #                 random walk: out/compare/sweep/SCENE/sweep.{png,md,csv}
+#                 and out/compare/sweep/summary.{png,md}
 #   make figures  the README's picture docs/images/head.png (compare on head)
 #   make screenshots  the add-on's panels, docs/images/ui-*.png (Xvfb, 3.4)
 #   make clean    remove build/
@@ -263,6 +264,8 @@ sweep: deps all $(filter $(BUILD)/%,$(SWEEP_BLENDER))
 			|| { tail -n 40 $$log; exit 1; }; \
 		grep -E '^sweep' $$log; \
 	done
+	@$(PYTHON) scripts/sweep_summary.py out/compare/sweep \
+		--scenes $(shell echo $(SWEEP_SCENES) | tr ' ' ,)
 
 # The README's picture: the head scene without SSS, with the library and
 # with Cycles' random walk (the reference), each with its time, from a
