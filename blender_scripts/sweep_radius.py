@@ -250,14 +250,20 @@ def plot(args, rows, path):
         rs = sorted((r for r in rows if r["samples"] == n),
                     key=lambda r: r["scale"])
         x = [r["scale"] for r in rs]
-        line, = ax.plot(x, [r["rmse_q_no_sss"] for r in rs], "s--",
+
+        def shown(key):
+            # An error of 0 (the walk is the diffuse render: Cycles below
+            # its smallest radius) has no place on a log axis.
+            return [r[key] if r[key] > 0 else float("nan") for r in rs]
+        line, = ax.plot(x, shown("rmse_q_no_sss"), "s--",
                         label=f"no SSS, {n} spp")
-        ax.plot(x, [r["rmse_q_ours"] for r in rs], "o-",
+        ax.plot(x, shown("rmse_q_ours"), "o-",
                 color=line.get_color(), label=f"no SSS {n} spp + ours")
         for r in rs:
-            ax.annotate(f"{r['kernel_px']:.2g} px",
-                        (r["scale"], r["rmse_q_ours"]), fontsize=6,
-                        xytext=(3, 3), textcoords="offset points")
+            if r["rmse_q_ours"] > 0:
+                ax.annotate(f"{r['kernel_px']:.2g} px",
+                            (r["scale"], r["rmse_q_ours"]), fontsize=6,
+                            xytext=(3, 3), textcoords="offset points")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_ylabel("RMSE against the random walk, quarter resolution\n"
