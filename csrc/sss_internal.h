@@ -100,9 +100,8 @@ double sss__cycles4_rw_d_over_radius(double albedo);
  * (Burley: Subsurface Radius x Scale; other profiles: their support / 16)
  * is `radius` scene units: 1 from 1e-3 up, 0 at and below 1e-5 (where
  * Cycles' walk loses light to float precision, and below 1e-8 renders its
- * diffuse BSDF), log-linear
- * between, so the output tends continuously to the uncalibrated blur,
- * itself the identity there. */
+ * diffuse BSDF), log-linear between, so the output tends continuously to
+ * the uncalibrated blur, itself the identity there. */
 float sss__calibration_fade(double radius);
 /* Whether the material's gain is applied at all, and so depends on the
  * view (then sss__view_cosine is worth computing). */
