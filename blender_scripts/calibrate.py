@@ -92,7 +92,10 @@ def parse_args():
     args = p.parse_args(argv)
     args.part = args.part.split(",")
     args.radii = [float(x) for x in args.radii.split(",")]
-    args.view_angles = [float(x) for x in args.view_angles.split(",")]
+    try:
+        args.view_angles = [float(x) for x in args.view_angles.split(",")]
+    except ValueError as e:
+        p.error(f"--view-angles: {e}")
     if not all(0.0 <= a < 90.0 for a in args.view_angles):
         p.error("--view-angles: each in [0, 90) degrees")
     args.out = os.path.abspath(args.out)

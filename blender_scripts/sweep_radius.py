@@ -43,6 +43,7 @@ sys.path.insert(0, HERE)
 import compare_runs as compare  # noqa: E402  (puts the add-on on sys.path)
 from separable_sss import blender_compat as compat  # noqa: E402
 import compare_metrics as cm  # noqa: E402
+import numpy as np  # noqa: E402
 from exr_io import read_exr  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
@@ -166,7 +167,6 @@ def relative_difference(img, base, mask):
     pixels, relative to base (floored at 1 % of base's mean there, so that
     black pixels do not divide by zero): 0 where ours is the render
     without SSS."""
-    import numpy as np
     a, b = img[mask].astype(np.float64), base[mask].astype(np.float64)
     floor = 0.01 * max(float(np.mean(np.abs(b))), 1e-12)
     return float(np.max(np.abs(a - b) / np.maximum(np.abs(b), floor)))

@@ -19,15 +19,20 @@ EQUAL = 1e-3
 
 
 def read(path):
+    """The rows of one sweep.csv; ValueError names the file and what is
+    wrong in it."""
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
     if not rows:
         raise ValueError(f"{path}: no rows")
-    for r in rows:
-        for key in ("scale", "kernel_px", "ratio_q", "cut_q", "rmse_q_no_sss",
-                    "rmse_q_ours", "ours_vs_plain"):
-            r[key] = float(r[key])
-        r["samples"] = int(r["samples"])
+    for n, r in enumerate(rows, 2):
+        try:
+            for key in ("scale", "ratio_q"):
+                r[key] = float(r[key])
+            r["samples"] = int(r["samples"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise ValueError(f"{path}: line {n}: {e!r} (not a sweep_radius.py "
+                             "sweep.csv?)") from None
     return rows
 
 
@@ -83,7 +88,10 @@ def main():
         path = os.path.join(args.dir, name, "sweep.csv")
         if not os.path.isfile(path):
             p.error(f"{path}: missing")
-        scenes[name] = read(path)
+        try:
+            scenes[name] = read(path)
+        except ValueError as e:
+            p.error(str(e))
     lines = ["# Radius sweep: every scene", "",
              "Error with our default method over the error without SSS, "
              "RMSE over the scattering pixels at quarter resolution against "

@@ -283,6 +283,20 @@ static void test_apply(void)
 	}
 }
 
+/* A Burley material of radius 0.05 m with 4.x's Random Walk calibration
+ * and mapping for the diffuse colour col. */
+static sss_material calibrated(const float col[3])
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	memcpy(m.albedo, col, 3 * sizeof *col);
+	m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+	return m;
+}
+
 /* As the radius vanishes the gain fades continuously to 1: none at and
  * below 1e-5 (Cycles' walk loses light to float precision there, and
  * renders its diffuse BSDF below 1e-8), all of it from 1e-3 up, log-linear
@@ -293,13 +307,7 @@ static void test_fade(void)
 	float g[3], out[3], prev[3];
 	int same;
 	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, col, 1.0f, g);
-	sss_material m;
-	sss_material_default(&m, SSS_PROFILE_BURLEY);
-	m.pass_index = 1;
-	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
-	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
-	memcpy(m.albedo, col, sizeof col);
-	m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+	sss_material m = calibrated(col);
 	const struct { double radius, fade; } at[] = {
 		{1e-12, 0.0}, {1e-8, 0.0}, {1e-5, 0.0}, {1e-4, 0.5},
 		{1e-3, 1.0}, {1e-2, 1.0}, {0.05, 1.0}, {1e3, 1.0}};
@@ -341,13 +349,7 @@ static void test_fade(void)
 static void test_view(void)
 {
 	const float col[3] = {0.05f, 0.4f, 0.8f};
-	sss_material m;
-	sss_material_default(&m, SSS_PROFILE_BURLEY);
-	m.pass_index = 1;
-	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
-	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
-	memcpy(m.albedo, col, sizeof col);
-	m.radius[0] = m.radius[1] = m.radius[2] = 0.05f;
+	sss_material m = calibrated(col);
 	const double degrees[] = {0, 20, 45, 60, 75, 85};
 	for (size_t k = 0; k < sizeof degrees / sizeof *degrees; k++) {
 		double tilt = degrees[k] * 3.14159265358979 / 180.0;

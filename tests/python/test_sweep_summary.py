@@ -56,3 +56,12 @@ def test_missing_scene_is_named(tmp_path):
     proc = run(tmp_path, "--scenes", "a,nowhere")
     assert proc.returncode != 0
     assert "nowhere" in proc.stderr and "sweep.csv" in proc.stderr
+
+
+def test_bad_csv_is_named(tmp_path):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "sweep.csv").write_text("scene,scale\na,x\n")
+    proc = run(tmp_path, "--scenes", "a")
+    assert proc.returncode != 0
+    assert "a/sweep.csv" in proc.stderr and "line 2" in proc.stderr
+    assert not (tmp_path / "summary.md").exists()
