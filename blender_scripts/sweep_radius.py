@@ -175,7 +175,6 @@ def relative_difference(img, base, mask):
 def mean_ratio(ref, base, mask):
     """The random walk's mean over the scattering pixels over the render
     without SSS's, per channel, as "r/g/b"."""
-    import numpy as np
     r = ref[mask].astype(np.float64).mean(axis=0)
     b = base[mask].astype(np.float64).mean(axis=0)
     return "/".join(f"{x / y:.3f}" if y > 0 else "nan" for x, y in zip(r, b))
