@@ -145,14 +145,15 @@ static void usage(void)
 	fputs("usage: sss-bench [--size W H] [--coverage C] [--radius PX]\n"
 	      "                 [--method NAME] [--threads N] [--scalar]\n"
 	      "                 [--repeat N] [--rows N] [--dump PREFIX] [--header]\n"
-	      "                 [--no-scatter]\n"
+	      "                 [--no-scatter] [--taps N]\n"
 	      "       sss-bench --methods   (the library's methods, one a line)\n"
 	      "Prints one CSV line: method,width,height,rows,coverage,radius_px,\n"
 	      "threads,simd,seconds,mpx_per_s,ns_per_scattering_px,rss_inputs_mib,\n"
 	      "rss_peak_mib. --rows N times only the first N rows (the slow\n"
 	      "reference on a band of the frame); --no-scatter gives the material\n"
 	      "a pass index no pixel has (what every frame costs: the passes\n"
-	      "read and recombined); --dump writes PREFIX_light.f32\n"
+	      "read and recombined); --taps N sets the material's tap budget\n"
+	      "(0: the library's default); --dump writes PREFIX_light.f32\n"
 	      "(RGB), PREFIX_depth.f32, PREFIX_index.f32 and PREFIX_scene.json.\n", stderr);
 	exit(2);
 }
@@ -161,7 +162,7 @@ int main(int argc, char **argv)
 {
 	int w = 1920, h = 1080, rows = 0, header = 0, no_scatter = 0;
 	double px = 16;
-	int threads = 1, scalar = 0, method = SSS_METHOD_SEPARABLE, repeat = 3;
+	int threads = 1, scalar = 0, method = SSS_METHOD_SEPARABLE, repeat = 3, taps = 0;
 	const char *method_name = "separable", *dump_prefix = NULL;
 	double coverage = 1.0;
 	for (int i = 1; i < argc; i++) {
@@ -178,6 +179,8 @@ int main(int argc, char **argv)
 			scalar = 1;
 		else if (!strcmp(argv[i], "--method") && i + 1 < argc)
 			method = method_by_name(method_name = argv[++i]);
+		else if (!strcmp(argv[i], "--taps") && i + 1 < argc)
+			taps = atoi(argv[++i]);
 		else if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
 			repeat = atoi(argv[++i]);
 		else if (!strcmp(argv[i], "--rows") && i + 1 < argc)
@@ -195,11 +198,13 @@ int main(int argc, char **argv)
 		} else
 			usage();
 	}
-	if (w < 1 || h < 1 || repeat < 1 || !(coverage > 0 && coverage <= 1))
+	if (w < 1 || h < 1 || repeat < 1 || !(coverage > 0 && coverage <= 1) ||
+	    taps < 0 || taps > 4097)
 		usage();
 	synth *s = synth_new(w, h);
 	fill(s, coverage);
 	sss_material m = material(px, w);
+	m.taps = taps;
 	if (no_scatter)
 		m.pass_index = 3; /* fill() uses 1 and 2 */
 	if (dump_prefix) {

@@ -346,9 +346,11 @@ SSS_API sss_result sss_material_support(const sss_material *mat,
 /* The 1-D kernel the separable method uses for this material at a given
  * projection (pixels per metre) on a flat, fronto-parallel surface with
  * nothing rejected: tap offsets in pixels and per-channel weights that sum
- * to 1. taps <= 0 means the material's or the default tap count. On input
- * *count is the capacity of the arrays (weights has 3 * capacity floats);
- * on output the number of taps written. */
+ * to 1. taps <= 0 means the material's or the default tap count; a kernel
+ * whose half-width is at most 64 px has every pixel as a tap whatever the
+ * count (up to 129). On input *count is the capacity of the arrays
+ * (weights has 3 * capacity floats); on output the number of taps
+ * written. */
 SSS_API sss_result sss_kernel_1d(const sss_material *mat,
                                  double pixels_per_metre, int32_t taps,
                                  float *offsets, float *weights,
@@ -412,7 +414,11 @@ typedef struct sss_options {
 	uint32_t struct_size;
 	int32_t method;          /* sss_method */
 	float radius_scale;      /* >= 0, multiplies every profile length */
-	int32_t taps;            /* default taps per 1-D pass, 1..4097 (odd) */
+	int32_t taps;            /* default taps per 1-D pass, 1..4097 (odd);
+	                            the separable method reads every pixel
+	                            of a kernel whose half-width is at most
+	                            64 px whatever the budget, which only
+	                            thins wider ones */
 	int32_t num_threads;     /* 0 = all cores, 1..256 */
 	double background_depth; /* > 0: depth >= this is background (1e9) */
 	int32_t max_support_px;  /* >= 1: cap on a kernel's half-width */

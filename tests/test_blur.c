@@ -332,6 +332,47 @@ static void test_burley_vs_reference(void)
 	}
 }
 
+/* Up to 64 px every pixel under the kernel is a tap, whatever the budget
+ * (reading them all costs less than a thin budget's gathered pairs and
+ * follows the profile at least as closely): budgets of 9, 33 and 129 taps
+ * give the same image bit for bit on a tilted plane (depth changes under
+ * the kernel) with noise. Beyond 64 px the budget thins the kernel. */
+static void test_budget_below_dense_limit(void)
+{
+	int w = 128, h = 72; /* wider than every kernel: none is cut */
+	static const int budgets[] = {9, 33, 129}, widths[] = {12, 40, 60, 96};
+	for (int k = 0; k < 4; k++) {
+		int px = widths[k];
+		synth *s = synth_new(w, h);
+		synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
+		for (int y = 0; y < h; y++)
+			for (int x = 0; x < w; x++)
+				s->depth[y * w + x] = 2.0f + 0.004f * x + 0.002f * y;
+		synth_noise(s, 0, 1, 31);
+		run r[3];
+		for (int b = 0; b < 3; b++) {
+			sss_material m = material_px(SSS_PROFILE_BURLEY, 1, px, w, 2);
+			m.taps = budgets[b];
+			sss_options o = options(SSS_METHOD_SEPARABLE);
+			r[b] = apply(s, &m, 1, &o);
+		}
+		size_t n = (size_t)3 * w * h;
+		int same = !r[0].status && !r[1].status && !r[2].status &&
+		           !memcmp(r[0].light, r[1].light, n * sizeof(float)) &&
+		           !memcmp(r[0].light, r[2].light, n * sizeof(float));
+		char id[48];
+		snprintf(id, sizeof id, "dense-budget-%d", px);
+		if (px <= 64)
+			CHECK(id, same, "budgets 9, 33 and 129 differ at %d px", px);
+		else
+			CHECK(id, !same, "budgets 9, 33 and 129 agree at %d px: "
+			      "nothing thins the kernel", px);
+		for (int b = 0; b < 3; b++)
+			run_free(&r[b]);
+		synth_free(s);
+	}
+}
+
 /* Standard deviation (pixels, along x) of the response to an impulse. */
 static double spread_x(const float *light, int w, int y, int x0, int x1,
                        int cx)
@@ -788,6 +829,7 @@ int main(void)
 	test_impulse_symmetry();
 	test_gaussian_vs_reference();
 	test_burley_vs_reference();
+	test_budget_below_dense_limit();
 	test_depth();
 	test_materials();
 	test_threads();

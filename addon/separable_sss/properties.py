@@ -192,8 +192,9 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
     method: EnumProperty(name="Method", items=method_items)
     taps: IntProperty(
         name="Taps", min=1, max=4097, default=33,
-        description="Samples per 1-D pass of the separable methods: more "
-        "is smoother on wide blurs and slower")
+        description="Samples per 1-D pass of the separable methods on "
+        "blurs wider than 64 pixels (narrower ones read every pixel): "
+        "more is smoother on wide blurs and slower")
     output_dir: StringProperty(
         name="Output Folder", subtype="DIR_PATH", default="",
         description="Where passes and results go (empty: a temporary "
