@@ -242,11 +242,12 @@ compare: deps all
 		>out/compare/summary.txt
 	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,results.csv,results.md} and out/compare/summary.txt"
 
-# Never worse than no SSS: every bundled scene and the sharp-edged block
-# with every Subsurface scaled from 1e-6x to 1e3x, against the random walk
-# of the Blender artists use (4.5 LTS; SWEEP_BLENDER=blender for 3.4)
+# Never worse than no SSS: every bundled scene, the sharp-edged block and
+# a small front-lit sphere seen orthographically, with every Subsurface
+# scaled from 1e-6x to 1e3x, against the random walk of the Blender artists
+# use (4.5 LTS; SWEEP_BLENDER=blender for 3.4)
 # (blender_scripts/sweep_radius.py): out/compare/sweep/SCENE/sweep.{png,md,csv}.
-SWEEP_SCENES ?= head marble mixed block
+SWEEP_SCENES ?= head marble mixed block sphere
 SWEEP_ARGS ?=
 SWEEP_BLENDER ?= $(word 1,$(BPY_BLENDERS))
 sweep: deps all $(filter $(BUILD)/%,$(SWEEP_BLENDER))

@@ -43,7 +43,7 @@ def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="build_scene.py")
     p.add_argument("--kind", choices=("demo", "head", "two", "none", "marble", "mixed",
-                                            "block", "slab"), required=True)
+                                            "block", "slab", "sphere"), required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--samples", type=int, default=8)
@@ -335,6 +335,26 @@ def build_slab(scene):
     place_camera(scene, (0.0, -1.0, 0.0), (0, 0, 0), 50)
 
 
+def build_sphere(scene):
+    """An 8 cm skin sphere lit from the front, seen by an orthographic
+    camera close up: at large radius scales (make sweep at 100-1000x: 1 to
+    10 m of red radius) the light spreads over the whole object, where no
+    light may be created."""
+    skin = random_walk(material("Skin", **{
+        "base": (0.8, 0.55, 0.45, 1.0), "subsurface": 0.01,
+        "radius": (1.0, 0.35, 0.2),
+        "subsurface_color": (0.85, 0.45, 0.35, 1.0), "roughness": 0.5}))
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.04, segments=64,
+                                         ring_count=32, location=(0, 0, 0))
+    bpy.ops.object.shade_smooth()
+    assign(bpy.context.active_object, skin)
+    light("AREA", "Key", 3.0, (-0.15, -0.4, 0.15), size=0.15,
+          target=(0, 0, 0))
+    place_camera(scene, (0.0, -0.5, 0.0), (0, 0, 0), 50)
+    scene.camera.data.type = "ORTHO"
+    scene.camera.data.ortho_scale = 0.12
+
+
 def main():
     args = parse_args()
     scene = bpy.context.scene
@@ -352,6 +372,8 @@ def main():
         build_block(scene)
     elif args.kind == "slab":
         build_slab(scene)
+    elif args.kind == "sphere":
+        build_sphere(scene)
     else:
         build_two(scene, scatter=args.kind == "two")
     compat.ensure_nodes(scene.world).nodes["Background"].inputs["Color"] \
