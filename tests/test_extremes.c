@@ -24,7 +24,7 @@ typedef struct shape {
 } shape;
 
 static const shape shapes[] = {{1, 1}, {1, 7}, {7, 1}, {3, 3}, {9, 5},
-                               {513, 257}};
+                               {257, 129}};
 
 enum poison_kind { POISON_NONE, POISON_DEPTH, POISON_LIGHT, POISON_COLOUR };
 
