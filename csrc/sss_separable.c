@@ -30,8 +30,8 @@
  * every pixel a tap, for tap budgets up to 2 DENSE_MAX_HALF + 1 (larger
  * budgets compute their weights per pixel). A kernel that fits is read
  * densely whatever its budget: every pixel in the vector loop costs less
- * than a sparse budget's gathered pairs (about a fifth at 24 px, make
- * bench) and follows the profile at least as closely, so the budget only
+ * than a sparse budget's gathered pairs (about a fifth at 24-32 px,
+ * sss-bench --taps) and follows the profile at least as closely, so the budget only
  * thins kernels wider than this. */
 #define R_STEPS 32
 #define DENSE_MAX_HALF 64
