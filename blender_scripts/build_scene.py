@@ -22,6 +22,9 @@ KIND:
          face and leaves the next (the sweep's fourth scene)
   slab   a thin (1.5 cm) random-walk skin slab facing the camera, lit only
          from behind (back-lit transmission's test)
+  sphere an 8 cm skin sphere lit from the front and seen close up by an
+         orthographic camera: a radius as large as the object (the sweep's
+         fifth scene)
 Rendering is Cycles at low resolution and samples; denoising and light
 clamping are off so Blender's Combined is exactly the sum of its passes.
 """
