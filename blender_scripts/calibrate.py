@@ -55,7 +55,7 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
 from separable_sss import native  # noqa: E402
-from exr_io import read_exr  # noqa: E402
+from exr_io import read_exr, rgb  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
 ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
@@ -222,13 +222,6 @@ def render_to(scene, path, seed):
     compat.set_multilayer_exr(scene.render.image_settings)
     bpy.data.images["Render Result"].save_render(path, scene=scene)
     return read_exr(path), seconds
-
-
-def rgb(ch, name):
-    for prefix in (f"ViewLayer.{name}", name):
-        if f"{prefix}.R" in ch:
-            return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
-    raise KeyError(name)
 
 
 def albedo_sets(args):

@@ -20,7 +20,8 @@ from separable_sss.switch_off import switched_off  # noqa: E402
 import numpy as np  # noqa: E402
 
 import compare_metrics as cm  # noqa: E402
-from exr_io import SHORT_PASS_NAMES, read_exr, write_exr  # noqa: E402
+from exr_io import (SHORT_PASS_NAMES, read_exr, rgb, single,  # noqa: E402
+                    write_exr)
 
 
 BACKGROUND = 1e10
@@ -31,27 +32,6 @@ REF_SEED_OFFSET = 7919  # reference noise independent of the others'
 
 def log(*a):
     print("compare:", *a, flush=True)
-
-
-# ------------------------------------------- passes (EXR I/O: exr_io.py)
-
-def rgb(ch, name):
-    """(h, w, 3) of the first channel set ending in name.R/G/B."""
-    for prefix in (f"ViewLayer.{name}", name):
-        if f"{prefix}.R" in ch:
-            return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
-    cands = [k for k in ch if k.endswith(f".{name}.R")]
-    if not cands:
-        raise KeyError(f"no {name} pass (have {sorted(ch)[:12]}...)")
-    prefix = cands[0][:-2]
-    return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
-
-
-def single(ch, name):
-    for k in ch:
-        if k.split(".")[-2:-1] == [name]:
-            return ch[k]
-    raise KeyError(f"no {name} pass")
 
 
 # ----------------------------------------------------------- the library

@@ -66,3 +66,25 @@ def write_exr(path, channels):
     out.write_image(np.stack([channels[n] for n in names], axis=-1)
                     .astype(np.float32))
     out.close()
+
+
+def rgb(ch, name):
+    """(h, w, 3) of the first channel set ending in name.R/G/B: name under
+    ViewLayer, name itself, else any layer's; KeyError names the pass."""
+    for prefix in (f"ViewLayer.{name}", name):
+        if f"{prefix}.R" in ch:
+            return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
+    cands = [k for k in ch if k.endswith(f".{name}.R")]
+    if not cands:
+        raise KeyError(f"no {name} pass (have {sorted(ch)[:12]}...)")
+    prefix = cands[0][:-2]
+    return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
+
+
+def single(ch, name):
+    """The one channel of pass name (Depth.Z, IndexMA.X, ...) in any
+    layer; KeyError names the pass."""
+    for k in ch:
+        if k.split(".")[-2:-1] == [name]:
+            return ch[k]
+    raise KeyError(f"no {name} pass")

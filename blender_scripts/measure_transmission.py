@@ -38,7 +38,7 @@ from separable_sss import blender_compat as compat  # noqa: E402
 import numpy as np  # noqa: E402
 
 import compare_metrics as cm  # noqa: E402
-from exr_io import read_exr  # noqa: E402
+from exr_io import read_exr, rgb  # noqa: E402
 
 REF_SEED_OFFSET = 7919
 
@@ -65,10 +65,6 @@ def parse_args():
     a = p.parse_args(argv)
     a.resolution = tuple(int(v) for v in a.resolution.lower().split("x"))
     return a
-
-
-def rgb(ch, prefix):
-    return np.stack([ch[f"{prefix}.{c}"] for c in "RGB"], axis=-1)
 
 
 def open_scene(args):

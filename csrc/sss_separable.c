@@ -31,8 +31,8 @@
  * budgets compute their weights per pixel). A kernel that fits is read
  * densely whatever its budget: every pixel in the vector loop costs less
  * than a sparse budget's gathered pairs (about a fifth at 24-32 px,
- * sss-bench --taps) and follows the profile at least as closely, so the budget only
- * thins kernels wider than this. */
+ * sss-bench --taps) and follows the profile at least as closely, so the
+ * budget only thins kernels wider than this. */
 #define R_STEPS 32
 #define DENSE_MAX_HALF 64
 #define PARAMS 6 /* W_r W_g W_b, A_r/8 A_g/8 A_b/8 */

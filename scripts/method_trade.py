@@ -29,7 +29,7 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "blender_scripts"))
-from exr_io import read_exr_parts  # noqa: E402
+from exr_io import read_exr_parts, rgb, single  # noqa: E402
 
 DEFAULT_VARIANTS = ("separable:taps=9,separable:taps=17,separable,"
                     "separable:taps=65,disk:samples=16,disk:samples=32,disk,"
@@ -53,27 +53,19 @@ def parse_variant(text):
     return method, params
 
 
-def channel(ch, names):
-    for n in names:
-        if n in ch:
-            return ch[n]
-    return None
-
-
 def combined(path):
     ch = read_exr_parts(path)[0]
-    rgb = [channel(ch, (f"SSS.Combined.{c}",)) for c in "RGB"]
-    if any(c is None for c in rgb):
+    if "SSS.Combined.R" not in ch:
         raise ValueError(f"{path}: no SSS.Combined (not an sss output?)")
-    return np.stack(rgb, -1).astype(np.float64)
+    return rgb(ch, "SSS.Combined").astype(np.float64)
 
 
 def material_index(path):
-    ch = read_exr_parts(path)[0]
-    for name, data in ch.items():
-        if re.search(r"(^|\.)IndexMA\.[XV]$", name):
-            return np.rint(data).astype(np.int64)
-    raise ValueError(f"{path}: no IndexMA pass")
+    try:
+        return np.rint(single(read_exr_parts(path)[0], "IndexMA")) \
+            .astype(np.int64)
+    except KeyError:
+        raise ValueError(f"{path}: no IndexMA pass") from None
 
 
 def run_sss(args, passes, scene, method, params, out, repeat):
