@@ -53,6 +53,14 @@ def parse_variant(text):
     return method, params
 
 
+def known_methods(sss):
+    """The method names `sss --help` lists under "methods:"."""
+    proc = subprocess.run([sss, "--help"], capture_output=True, text=True)
+    text = proc.stdout + proc.stderr
+    block = text.partition("\nmethods:\n")[2].split("\n\n")[0]
+    return {line.split()[0] for line in block.splitlines() if line.strip()}
+
+
 def combined(path):
     ch = read_exr_parts(path)[0]
     if "SSS.Combined.R" not in ch:
@@ -196,6 +204,12 @@ def main():
     for path in (args.passes, args.scene, args.sss):
         if not os.path.exists(path):
             p.error(f"{path}: no such file")
+    # before the reference's long run, not after it
+    methods = known_methods(args.sss)
+    for v in args.variants:
+        if methods and parse_variant(v)[0] not in methods:
+            p.error(f"--variants: {v!r}: unknown method (known: "
+                    f"{', '.join(sorted(methods))})")
     try:
         rows = measure(args)
     except (RuntimeError, ValueError, OSError) as e:

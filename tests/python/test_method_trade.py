@@ -47,3 +47,14 @@ def test_bad_variant_named(tmp_path, blender_render):
     assert proc.returncode == 2
     assert "--variants" in proc.stderr and "taps=many" in proc.stderr
     assert not (tmp_path / "method_trade.csv").exists()
+
+
+def test_unknown_method_named_before_any_run(tmp_path, blender_render):
+    """An unknown method is refused at once, naming the methods there
+    are, not after the reference's long run."""
+    proc = run(blender_render / "render.exr", "--scene",
+               blender_render / "scene.json", "--out", tmp_path,
+               "--variants", "separable,gaussian-blur")
+    assert proc.returncode == 2
+    assert "gaussian-blur" in proc.stderr and "separable-exact" in proc.stderr
+    assert not (tmp_path / "method_trade.csv").exists()
