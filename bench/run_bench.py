@@ -55,7 +55,7 @@ class Bench:
 
     def run(self, tag, size=(1920, 1080), coverage=1.0, radius=16,
             method="separable", threads=0, scalar=False, repeat=2, rows=0,
-            dump=None, no_scatter=False):
+            dump=None, no_scatter=False, calibrated=False):
         cmd = [self.exe, "--size", str(size[0]), str(size[1]),
                "--coverage", str(coverage), "--radius", str(radius),
                "--method", method, "--threads", str(threads),
@@ -68,6 +68,8 @@ class Bench:
             cmd += ["--dump", dump]
         if no_scatter:
             cmd.append("--no-scatter")
+        if calibrated:
+            cmd.append("--calibrated")
         out = subprocess.run(cmd, check=True, capture_output=True, text=True)
         row = dict(zip(FIELDS, next(csv.reader(io.StringIO(out.stdout)))))
         row["tag"] = tag
@@ -131,6 +133,10 @@ def ratios(b, results):
     floor = b.run("coverage", hd, cov, r, threads=1, repeat=3,
                   no_scatter=True)
     tenth = b.run("coverage", hd, 0.1, r, threads=1, repeat=3)
+    # Matching the random walk's energy: the view cosine and the surface's
+    # curvature at every scattering pixel.
+    calibrated = b.run("calibrated", hd, cov, r, threads=1, repeat=3,
+                       calibrated=True)
     npix = hd[0] * hd[1]
 
     def above(row):
@@ -153,6 +159,7 @@ def ratios(b, results):
         "ns_above_floor_100": above(one),
         "ns_above_floor_10": above(tenth),
         "coverage_10_vs_100": above(tenth) / above(one),
+        "calibrated_vs_not": calibrated["seconds"] / one["seconds"],
         "cpu_flags": cpu_flags(),
     })
     log(f"1080p, 100% coverage, 16 px, separable: {per_core:.2f} Mpx/s per "
@@ -415,7 +422,10 @@ def markdown(rows, results):
            f"recombined), 10 % coverage vs 100 % (1 thread) | "
            f"{results['ns_above_floor_10']:.0f} vs "
            f"{results['ns_above_floor_100']:.0f} ns: "
-           f"{results['coverage_10_vs_100']:.2f}x | about 1x |"]
+           f"{results['coverage_10_vs_100']:.2f}x | about 1x |",
+           f"| energy matched to Random Walk (Skin) (view and curvature at "
+           f"every pixel) vs not (1 thread) | "
+           f"{results['calibrated_vs_not']:.2f}x | |"]
     if "vs_bilateral" in results:
         out.append(f"| vs Blender Bilateral Blur ({results['bilateral_size']}, "
                    f"all cores) | {results['vs_bilateral']:.0f}x | >= 5x |")

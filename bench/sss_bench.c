@@ -63,12 +63,17 @@ static double covered(const synth *s)
 }
 
 /* Burley (skin radii) scaled so that its support spans `px` pixels at the
- * centre of a `w` pixels wide frame. */
-static sss_material material(double px, int w)
+ * centre of a `w` pixels wide frame; `calibrated`: matched to 4.x's
+ * Random Walk (Skin), its radius mapping and energy. */
+static sss_material material(double px, int w, int calibrated)
 {
 	sss_material m;
 	sss_material_default(&m, SSS_PROFILE_BURLEY);
 	m.pass_index = 1;
+	if (calibrated) {
+		m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+		m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	}
 	double support;
 	sss_material_support(&m, &support);
 	double ppm = w * 50.0 / 36.0 / DEPTH;
@@ -145,7 +150,7 @@ static void usage(void)
 	fputs("usage: sss-bench [--size W H] [--coverage C] [--radius PX]\n"
 	      "                 [--method NAME] [--threads N] [--scalar]\n"
 	      "                 [--repeat N] [--rows N] [--dump PREFIX] [--header]\n"
-	      "                 [--no-scatter] [--taps N]\n"
+	      "                 [--no-scatter] [--taps N] [--calibrated]\n"
 	      "       sss-bench --methods   (the library's methods, one a line)\n"
 	      "Prints one CSV line: method,width,height,rows,coverage,radius_px,\n"
 	      "threads,simd,seconds,mpx_per_s,ns_per_scattering_px,rss_inputs_mib,\n"
@@ -153,7 +158,9 @@ static void usage(void)
 	      "reference on a band of the frame); --no-scatter gives the material\n"
 	      "a pass index no pixel has (what every frame costs: the passes\n"
 	      "read and recombined); --taps N sets the material's tap budget\n"
-	      "(0: the library's default); --dump writes PREFIX_light.f32\n"
+	      "(0: the library's default); --calibrated matches 4.x's Random\n"
+	      "Walk (Skin) (the energy calibration at each pixel's view and\n"
+	      "curvature); --dump writes PREFIX_light.f32\n"
 	      "(RGB), PREFIX_depth.f32, PREFIX_index.f32 and PREFIX_scene.json.\n", stderr);
 	exit(2);
 }
@@ -161,6 +168,7 @@ static void usage(void)
 int main(int argc, char **argv)
 {
 	int w = 1920, h = 1080, rows = 0, header = 0, no_scatter = 0;
+	int calibrated = 0;
 	double px = 16;
 	int threads = 1, scalar = 0, method = SSS_METHOD_SEPARABLE, repeat = 3, taps = 0;
 	const char *method_name = "separable", *dump_prefix = NULL;
@@ -191,6 +199,8 @@ int main(int argc, char **argv)
 			header = 1;
 		else if (!strcmp(argv[i], "--no-scatter"))
 			no_scatter = 1;
+		else if (!strcmp(argv[i], "--calibrated"))
+			calibrated = 1;
 		else if (!strcmp(argv[i], "--methods")) {
 			for (int32_t m = 0; sss_method_name(m); m++)
 				puts(sss_method_name(m));
@@ -203,7 +213,7 @@ int main(int argc, char **argv)
 		usage();
 	synth *s = synth_new(w, h);
 	fill(s, coverage);
-	sss_material m = material(px, w);
+	sss_material m = material(px, w, calibrated);
 	m.taps = taps;
 	if (no_scatter)
 		m.pass_index = 3; /* fill() uses 1 and 2 */
@@ -226,9 +236,13 @@ int main(int argc, char **argv)
 		                  "\"PERSP\", \"lens\": 50, \"sensor_width\": 36, "
 		                  "\"sensor_fit\": \"AUTO\"}, \"unit_scale\": 1, "
 		                  "\"materials\": [{\"pass_index\": 1, \"profile\": "
-		                  "\"burley\", \"mapping\": \"cycles\", \"radius\": "
-		                  "[%.9g, %.9g, %.9g]}]}\n", m.radius[0], m.radius[1],
-		                  m.radius[2]) < 0 || fclose(f)) {
+		                  "\"burley\", \"mapping\": \"%s\", %s\"radius\": "
+		                  "[%.9g, %.9g, %.9g]}]}\n",
+		                  calibrated ? "cycles-random-walk" : "cycles",
+		                  calibrated ? "\"calibration\": "
+		                               "\"cycles4-random-walk-skin\", " : "",
+		                  m.radius[0], m.radius[1], m.radius[2]) < 0 ||
+		    fclose(f)) {
 			fprintf(stderr, "sss-bench: cannot write %s\n", path);
 			return 1;
 		}

@@ -3,7 +3,7 @@ that libsss blurs, on flat slabs, headless:
 
     blender -b --factory-startup --python-exit-code 1 \\
         --python blender_scripts/calibrate.py -- --out DIR \\
-        [--part energy,edge,texture] [--samples 128] [--size 64]
+        [--part energy,edge,texture,shape] [--samples 128] [--size 64]
         [--radii 0.05,0.2] [--method RANDOM_WALK_SKIN]
 
 energy: a large thick box (2 x 2 m face, 1 m deep) faces an orthographic
@@ -32,6 +32,14 @@ edge: the same box under a sun at normal incidence, half of it shadowed by
 texture: the box with a striped Base Color (a checker texture) under the
   sun, random walk against SSS-off + libsss with post and pre-and-post
   texturing. Written to DIR/texture.csv.
+shape: a sphere of radius 4 cm (128 x 64 segments, smooth) seen head-on by
+  an orthographic camera 12 cm wide, under a sun along the view, with the
+  radius r = x a for each x of SHAPE_X (x: the radius times the sphere's
+  mean curvature 1/a), and the box under the same sun: the random walk
+  over SSS off in the middle 10 % of the frame (--size / 10 pixels square)
+  of the sphere, divided by the box's, is what a convex surface adds to
+  the flat slab's gain (the shape table of csrc/sss_calibration.c).
+  Written to DIR/shape_METHOD.csv.
 
 Everything is Cycles on the CPU with denoising and adaptive sampling off,
 clamping off, seed 1 (SSS off) and 2 (random walk).
@@ -61,6 +69,8 @@ from script_cli import run_main, script_argv  # noqa: E402
 ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
                (0.85, 0.9, 0.95), (0.98, 0.99, 1.0))
 VIEW = 0.2   # metres of slab face the camera sees
+SHAPE_RADIUS = 0.04   # the shape part's sphere, metres
+SHAPE_X = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
 
 
 def log(*a):
@@ -71,7 +81,8 @@ def parse_args():
     argv = script_argv()
     p = argparse.ArgumentParser(prog="calibrate.py")
     p.add_argument("--out", required=True)
-    p.add_argument("--part", default="energy,edge,texture")
+    p.add_argument("--part", default="energy,edge,texture",
+                   help="any of energy, edge, texture, shape")
     p.add_argument("--samples", type=int, default=128)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--radii", default="0.05")
@@ -121,15 +132,22 @@ def reset():
     return scene
 
 
-def slab(scene, turn=0.0):
-    """The box: face at y = 0 towards the camera, 6 x 6 m, 4 m deep, turned
-    by `turn` degrees about the vertical axis through the face's middle."""
-    mat = bpy.data.materials.new("Slab")
+def measured_material(name):
+    """A Principled BSDF with no specular and roughness 0.5, pass index 1:
+    what every part measures."""
+    mat = bpy.data.materials.new(name)
     mat.pass_index = 1
     bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
     compat.principled_input(bsdf, "specular").default_value = \
         compat.SPECULAR_OFF
     compat.principled_input(bsdf, "roughness").default_value = 0.5
+    return mat
+
+
+def slab(scene, turn=0.0):
+    """The box: face at y = 0 towards the camera, 6 x 6 m, 4 m deep, turned
+    by `turn` degrees about the vertical axis through the face's middle."""
+    mat = measured_material("Slab")
     mesh = bpy.data.meshes.new("Slab")
     obj = bpy.data.objects.new("Slab", mesh)
     scene.collection.objects.link(obj)
@@ -491,6 +509,64 @@ def part_texture(args):
     write_csv(os.path.join(args.out, f"texture_{args.method.lower()}.csv"),
               rows)
 
+# ---------------------------------------------------------------- shape
+
+def sphere(scene, radius):
+    """A smooth sphere of `radius` metres at the origin."""
+    mat = measured_material("Sphere")
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=radius, segments=128,
+                                         ring_count=64, location=(0, 0, 0))
+    obj = bpy.context.active_object
+    for poly in obj.data.polygons:
+        poly.use_smooth = True
+    obj.data.materials.append(mat)
+    return obj, mat
+
+
+def middle_ratio(scene, mat, albedo, radius, args, tag):
+    """Random walk over SSS off, per channel, in the middle of the frame."""
+    n = args.size
+    k = max(2, n // 10)
+    win = (slice((n - k) // 2, (n + k) // 2),) * 2
+    means = {}
+    for label, sub in (("off", 0.0), ("rw", 1.0)):
+        set_material(mat, albedo, radius, sub, args.method)
+        path = os.path.join(args.out, "work", f"shape_{tag}_{label}.exr")
+        ch, _ = render_to(scene, path, 1 if label == "off" else 2)
+        means[label] = rgb(ch, "Combined")[win].reshape(-1, 3).mean(axis=0)
+    return means["rw"] / np.maximum(means["off"], 1e-12)
+
+
+def part_shape(args):
+    global VIEW
+    rows = []
+    for albedo in albedo_sets(args):
+        VIEW = 0.2
+        scene = reset()
+        _, mat = slab(scene)
+        world(scene, 0.0)
+        sun(scene, (0.0, 1.0, 0.0))
+        setup_render(scene, args, None)
+        flat = middle_ratio(scene, mat, albedo, 0.05, args, "slab")
+        VIEW = 3.0 * SHAPE_RADIUS
+        for x in SHAPE_X:
+            scene = reset()
+            _, mat = sphere(scene, SHAPE_RADIUS)
+            world(scene, 0.0)
+            sun(scene, (0.0, 1.0, 0.0))
+            setup_render(scene, args, None)
+            ratio = middle_ratio(scene, mat, albedo, x * SHAPE_RADIUS, args,
+                                 f"{x:g}")
+            for c in range(3):
+                rows.append(dict(method=args.method, x=x, albedo=albedo[c],
+                                 sphere=float(ratio[c]), slab=float(flat[c]),
+                                 gain=float(ratio[c] / flat[c])))
+                log(f"shape x={x:g} A={albedo[c]:.3f}: sphere "
+                    f"{ratio[c]:.4f} slab {flat[c]:.4f} gain "
+                    f"{ratio[c] / flat[c]:.4f}")
+    write_csv(os.path.join(args.out, f"shape_{args.method.lower()}.csv"),
+              rows)
+
 
 def main():
     args = parse_args()
@@ -504,6 +580,8 @@ def main():
         part_edge(args)
     if "texture" in args.part:
         part_texture(args)
+    if "shape" in args.part:
+        part_shape(args)
     log(f"done in {time.perf_counter() - t0:.0f} s")
 
 

@@ -213,7 +213,13 @@ enum sss_calibration {
 	                               Principled diffuse lobe's, measured on
 	                               thick slabs (sss_calibration.c), after
 	                               the blur (a brighter DiffCol where
-	                               light leaves, as the random walk has) */
+	                               light leaves, as the random walk has),
+	                               at the pixel's view angle and, with a
+	                               Burley profile, times what a convex
+	                               surface adds (measured on spheres, at
+	                               the pixel's mean curvature from the
+	                               Depth pass; not where back-lit
+	                               transmission applies) */
 	SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN = 2, /* the same for Cycles
 	                               4.x/5.x's Random Walk (Skin) */
 	SSS_CALIBRATION_CYCLES4_RANDOM_WALK = 3 /* and for 4.x/5.x's Random
@@ -386,7 +392,9 @@ SSS_API sss_result sss_transmission_slab(const sss_material *mat,
  * to [0, 1]; a non-finite channel gets 1) seen at view_cosine, |cos| of
  * the angle between the surface's normal and the ray to the camera (1:
  * head-on; measured to 85 degrees, held beyond): the measured reflectance
- * of the calibrated renderer over the plain diffuse lobe's. NONE gives 1. */
+ * of the calibrated renderer over the plain diffuse lobe's, on a flat
+ * surface (sss_apply also follows the surface's curvature). NONE gives
+ * 1. */
 SSS_API sss_result sss_calibration_gain(int32_t calibration,
                                         const float albedo[3],
                                         float view_cosine, float gain[3]);

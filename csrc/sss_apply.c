@@ -150,6 +150,9 @@ typedef struct rows_ctx {
 	const sss__projection *proj; /* for the view cosine of calibrations */
 	float *signal;
 	int64_t signal_px, signal_ch; /* layout, as in sss__job */
+	float *curvature;   /* the surface's mean curvature at the first pixel
+	                       of each CURVATURE_BLOCK^2 block, NaN where not
+	                       read (or NULL: no material follows the shape) */
 	int16_t *slot;
 	const sss_image *out_combined, *out_diffuse_light;
 } rows_ctx;
@@ -209,6 +212,50 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 	}
 }
 
+/* Whether slot k's calibration follows the surface's shape: its table
+ * was measured with light from the front only. Where light also comes
+ * from behind, the walk carries it across the object too, and the
+ * back-lit transmission stands for what a finite object adds: both
+ * together counted that light twice (calibration.md). */
+static int shape_follows(const rows_ctx *ctx, int16_t k)
+{
+	return sss__calibration_needs_shape(&ctx->materials[k],
+	                                    ctx->kernels[k].calibration_fade) &&
+	       !sss__transmission_active(ctx->transmission, k);
+}
+
+/* The mean curvature under pixel (x, y) of slot k, over the largest
+ * radius the material's walk sees. */
+static double pixel_curvature(const rows_ctx *ctx, int16_t k, int32_t x,
+                              int32_t y)
+{
+	const float *r = ctx->kernels[k].walk_radius;
+	return sss__mean_curvature(&ctx->p->depth, ctx->slot, ctx->proj, ctx->w,
+	                           ctx->h, x, y, fmax(r[0], fmax(r[1], r[2])));
+}
+
+/* The curvature, read over circles of 2 px and more, changes little
+ * from pixel to pixel: it is read once per block of CURVATURE_BLOCK^2
+ * pixels, at its first pixel, and the block's pixels of the same slot
+ * share it (the others read their own): at 4 x 4 the shape term adds
+ * about 6 % to a calibrated frame (1080p, 16 px, one thread), at 2 x 2 it
+ * added 45 %. Rows of blocks. */
+#define CURVATURE_BLOCK 4
+
+static void curvature_rows(void *vctx, int32_t by0, int32_t by1)
+{
+	const rows_ctx *ctx = vctx;
+	int32_t bw = (ctx->w + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK;
+	for (int32_t by = by0; by < by1; by++)
+		for (int32_t bx = 0; bx < bw; bx++) {
+			int32_t x = CURVATURE_BLOCK * bx, y = CURVATURE_BLOCK * by;
+			int16_t k = ctx->slot[(size_t)y * ctx->w + x];
+			ctx->curvature[(size_t)by * bw + bx] =
+			        k >= 0 && shape_follows(ctx, k)
+			        ? (float)pixel_curvature(ctx, k, x, y) : NAN;
+		}
+}
+
 /* Back to light (contribution = light x DiffCol) and recombine. */
 static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 {
@@ -251,7 +298,26 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				           ? sss__view_cosine(&p->depth, slot, ctx->proj,
 				                              w, ctx->h, x, y)
 				           : 1.0f;
-				sss__calibration_apply(m, fade, mu, col, light);
+				/* and at the surface's curvature over the distance
+				   the walk travels */
+				float shape[3];
+				int shaped = ctx->curvature &&
+				             shape_follows(ctx, slot[i]);
+				if (shaped) {
+					const float *r = kernels[slot[i]].walk_radius;
+					int32_t b = CURVATURE_BLOCK;
+					size_t first = (size_t)(y - y % b) * w + (x - x % b);
+					float H = slot[first] == slot[i]
+					          ? ctx->curvature[(size_t)(y / b) *
+					                           ((w + b - 1) / b) + x / b]
+					          : NAN;
+					if (!isfinite(H))
+						H = (float)pixel_curvature(ctx, slot[i], x, y);
+					for (int c = 0; c < 3; c++)
+						shape[c] = H * r[c];
+				}
+				sss__calibration_apply(m, fade, mu, shaped ? shape : NULL,
+				                       col, light);
 			}
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
@@ -369,6 +435,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	float *signal = malloc(npix * 3 * sizeof *signal);
 	float *scratch = packed_output(out_combined, out_diffuse_light);
 	float *own_scratch = NULL;
+	float *curvature = NULL; /* allocated below, once kernels tell */
 	if (!scratch)
 		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
@@ -429,8 +496,28 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	if (opt.method == SSS_METHOD_SEPARABLE) /* reads colour planes */
 		job.signal_px = 1, job.signal_ch = (int64_t)npix;
 
+	/* Materials whose calibration follows the shape need the curvature
+	 * map (shape_follows). */
+	for (int32_t m = 0; m < material_count; m++)
+		if (kernels[m].support > 0.0 &&
+		    sss__calibration_needs_shape(&materials[m],
+		                                 kernels[m].calibration_fade) &&
+		    !sss__transmission_active(transmission, m)) {
+			curvature = malloc((size_t)((w + CURVATURE_BLOCK - 1) /
+			                            CURVATURE_BLOCK) *
+			                   ((h + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK) *
+			                   sizeof *curvature);
+			if (!curvature) {
+				r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working "
+				          "memory for a %dx%d image", w, h);
+				goto done;
+			}
+			break;
+		}
+
 	rows_ctx rc = {
 		.p = p, .materials = materials, .kernels = kernels,
+		.curvature = curvature,
 		.by_index = by_index, .transmission = transmission,
 		.background_depth = opt.background_depth, .w = w, .h = h,
 		.proj = &job.proj, .signal = signal, .signal_px = job.signal_px,
@@ -455,6 +542,9 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 			goto done;
 	}
 
+	if (curvature)
+		sss__parallel_rows((h + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK,
+		                   opt.num_threads, curvature_rows, &rc);
 	sss__parallel_rows(h, opt.num_threads, composite_rows, &rc);
 	r = SSS_OK;
 done:
@@ -463,6 +553,7 @@ done:
 	free(by_index);
 	free(slot);
 	free(signal);
+	free(curvature);
 	free(own_scratch);
 	free(zrange);
 	return r;

@@ -22,6 +22,8 @@ typedef struct sss__kernel {
 	float calibration_fade[3]; /* 0..1 per channel: how much of the
 	                              energy calibration applies at this
 	                              radius (sss__calibration_fade) */
+	float walk_radius[3]; /* scene units per channel: the radius Cycles'
+	                         walk sees (the calibration's shape term) */
 	int32_t texturing;   /* sss_texturing */
 	int32_t taps;        /* odd, >= 1 */
 	/* Per channel, at x_k = support * (k/(N-1))^2: */
@@ -107,9 +109,27 @@ float sss__calibration_fade(double radius);
  * view (then sss__view_cosine is worth computing). */
 int sss__calibration_needs_view(const sss_material *mat,
                                 const float fade[3]);
+/* Whether the material's calibration also follows the surface's shape
+ * (then sss__mean_curvature is worth computing). */
+int sss__calibration_needs_shape(const sss_material *mat,
+                                 const float fade[3]);
+/* The walk's energy on a convex object over a flat one's, for albedo a
+ * and x = mean curvature x radius (the calibration's shape table; 1 for
+ * x <= 0 and for calibrations without one). */
+float sss__shape_gain(int32_t calibration, float albedo, float x);
+/* shape_x: per channel, the surface's mean curvature x the radius the
+ * walk sees (NULL: flat, or not followed). */
 void sss__calibration_apply(const sss_material *mat, const float fade[3],
-                            float view_cosine, const float *diff_col,
-                            float *light);
+                            float view_cosine, const float *shape_x,
+                            const float *diff_col, float *light);
+
+/* The mean curvature (1 / scene units, positive where convex) of the
+ * visible surface at pixel (x, y), averaged over about rho scene units
+ * around it, from the Depth pass and the pixels of its slot
+ * (sss_curvature.c); 0 where it cannot be told. */
+double sss__mean_curvature(const sss_image *depth, const int16_t *slot,
+                           const sss__projection *p, int32_t w, int32_t h,
+                           int32_t x, int32_t y, double rho);
 
 /* Camera (sss_camera.c). */
 sss_result sss__projection_make(const sss_camera *cam, int32_t width,

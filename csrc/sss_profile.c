@@ -349,6 +349,7 @@ sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
 		                : channel_make(mat, c, unclamped_len, k->taps,
 		                               &one) / 16.0;
 		k->calibration_fade[c] = sss__calibration_fade(radius);
+		k->walk_radius[c] = (float)radius;
 	}
 	/* A profile too small for a double, or one that overflowed, does not
 	 * scatter: the identity is the right limit of the former, and the

@@ -509,6 +509,11 @@ sss_result sss__transmission_prepare(const sss_passes *p,
 	return SSS_OK;
 }
 
+int sss__transmission_active(const sss__transmission *t, int32_t m)
+{
+	return t && t->mats[m].model != SSS_TRANSMISSION_OFF;
+}
+
 void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
                            int32_t y, float light[3])
 {

@@ -27,6 +27,9 @@ sss_result sss__transmission_prepare(const sss_passes *p,
 void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
                            int32_t y, float light[3]);
 
+/* Whether material m takes back-lit light in this frame (t may be NULL). */
+int sss__transmission_active(const sss__transmission *t, int32_t m);
+
 void sss__transmission_free(sss__transmission *t); /* NULL is fine */
 
 #endif /* SSS_TRANSMISSION_H */

@@ -111,8 +111,8 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
         name="Match Energy", default=True,
         description="Scale the scattered light per colour channel by the "
         "random walk's measured reflectance over the diffuse lobe's, for "
-        "the colour and the angle each pixel is seen at (Random Walk "
-        "materials and the Burley profile)")
+        "the colour, the angle each pixel is seen at and how curved the "
+        "surface is there (Random Walk materials and the Burley profile)")
     radius: FloatVectorProperty(
         name="Radius", size=3, min=0.0, soft_max=0.1, precision=5,
         subtype="NONE", unit="LENGTH",

@@ -5,6 +5,7 @@ dump is one the `sss` command processes. No timing is asserted."""
 import csv
 import importlib.util
 import io
+import json
 import subprocess
 
 import numpy as np
@@ -89,3 +90,18 @@ def test_no_scatter_is_the_frame_floor(bench):
 def test_cpu_flags_named():
     flags = load_driver().cpu_flags()
     assert isinstance(flags, str) and flags
+
+
+def test_calibrated_runs_and_dumps_its_scene(bench, tmp_path):
+    """--calibrated: the energy matched to Random Walk (Skin), which reads
+    the view and the curvature at every pixel; the dumped scene says so."""
+    prefix = str(tmp_path / "f")
+    out = subprocess.run([bench, "--size", "48", "32", "--radius", "6",
+                          "--repeat", "1", "--calibrated", "--dump",
+                          prefix], capture_output=True, text=True,
+                         check=True).stdout
+    assert float(out.split(",")[8]) > 0
+    with open(prefix + "_scene.json") as f:
+        material = json.load(f)["materials"][0]
+    assert material["calibration"] == "cycles4-random-walk-skin"
+    assert material["mapping"] == "cycles-random-walk"

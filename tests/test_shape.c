@@ -1,0 +1,398 @@
+/* test_shape.c - the calibration's shape term: the mean curvature the
+ * library reads from the Depth pass (spheres seen orthographically and in
+ * perspective, a cylinder, a bowl, tilted planes, silhouettes), the shape
+ * tables (1 on flat and concave surfaces and without a calibration,
+ * finite, continuous in x), how a rise and a fall apply, and sss_apply
+ * on a sphere, whose middle gets the flat gain times the table's at
+ * radius / a, unless light also comes from behind. */
+#include "sss_internal.h"
+#include "test_util.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define N 96       /* image side, pixels */
+#define SPAN 3.0   /* the orthographic view's width, in sphere radii */
+
+enum surface { SPHERE, CYLINDER, BOWL, PLANE };
+
+/* Depth of `surface` (radius a = 1, centre at depth 4) through pixel
+ * (x, y), or 0 where the ray misses it; the plane is turned `tilt`
+ * radians about the vertical axis. */
+static double depth_at(const sss__projection *p, enum surface s, int x,
+                       int y, double tilt)
+{
+	double u = (x + 0.5 - p->cx) / p->fx, v = (p->cy - (y + 0.5)) / p->fy;
+	const double zc = 4.0;
+	if (s == PLANE) /* z = zc + tan(tilt) X, X = u (ortho) or u z */
+		return p->ortho ? zc + tan(tilt) * u : zc / (1.0 - tan(tilt) * u);
+	if (p->ortho) {
+		double r2 = s == CYLINDER ? u * u : u * u + v * v;
+		if (r2 >= 1.0)
+			return 0.0;
+		return s == BOWL ? zc + sqrt(1.0 - r2) : zc - sqrt(1.0 - r2);
+	}
+	/* (u t, v t, t) on the sphere |P - (0, 0, zc)| = 1 */
+	double k = u * u + v * v + 1.0, disc = zc * zc - k * (zc * zc - 1.0);
+	if (s != SPHERE || disc <= 0.0)
+		return 0.0;
+	return (zc - sqrt(disc)) / k;
+}
+
+static void make_depth(const sss__projection *p, enum surface s,
+                       double tilt, float *z, int16_t *slot)
+{
+	for (int y = 0; y < N; y++)
+		for (int x = 0; x < N; x++) {
+			double d = depth_at(p, s, x, y, tilt);
+			z[y * N + x] = (float)d;
+			slot[y * N + x] = d > 0.0 ? 0 : -1;
+		}
+}
+
+static sss__projection projection(int ortho)
+{
+	sss_camera cam;
+	sss_camera_default(&cam);
+	if (ortho) {
+		cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+		cam.ortho_scale = SPAN;
+	} else {
+		/* the sphere fills about the same share of the frame */
+		cam.lens_mm = 36.0 * 4.0 / SPAN;
+	}
+	sss__projection p;
+	sss__projection_make(&cam, N, N, &p, NULL, 0);
+	return p;
+}
+
+/* The largest relative error of H a against `want` over the pixels whose
+ * point lies within `inner` radii of the view axis. */
+static double worst(const sss__projection *p, enum surface s, double tilt,
+                    double rho, double inner, double want, int *count)
+{
+	float *z = malloc(sizeof(float) * N * N);
+	int16_t *slot = malloc(sizeof(int16_t) * N * N);
+	make_depth(p, s, tilt, z, slot);
+	sss_image depth = {z, N, N, 1, 0};
+	double err = 0.0;
+	*count = 0;
+	for (int y = 0; y < N; y++)
+		for (int x = 0; x < N; x++) {
+			/* a circle that leaves the image shrinks; the
+			   outermost rows and columns keep only a part */
+			if (slot[y * N + x] < 0 || x < 4 || y < 4 || x >= N - 4 ||
+			    y >= N - 4)
+				continue;
+			double u = (x + 0.5 - p->cx) / p->fx * (p->ortho ? 1.0 : 4.0);
+			double v = (p->cy - (y + 0.5)) / p->fy * (p->ortho ? 1.0 : 4.0);
+			double r2 = s == CYLINDER ? u * u : u * u + v * v;
+			double h = sss__mean_curvature(&depth, slot, p, N, N, x, y,
+			                               rho);
+			if (!isfinite(h)) {
+				err = INFINITY;
+				continue;
+			}
+			if (r2 > inner * inner)
+				continue;
+			double e = want == 0.0 ? fabs(h) : fabs(h / want - 1.0);
+			err = e > err ? e : err;
+			(*count)++;
+		}
+	free(z);
+	free(slot);
+	return err;
+}
+
+static void test_curvature(void)
+{
+	sss__projection ortho = projection(1), persp = projection(0);
+	int n;
+	double e;
+	/* Exact on a sphere whatever the circle: drop / chord^2 = 1 / 2a. */
+	const double rhos[] = {0.1, 0.25, 0.5};
+	for (int k = 0; k < 3; k++) {
+		e = worst(&ortho, SPHERE, 0, rhos[k], 0.6, 1.0, &n);
+		CHECK("sphere-ortho", e < 0.03 && n > 500, "rho %g: error %g over "
+		      "%d pixels", rhos[k], e, n);
+	}
+	e = worst(&persp, SPHERE, 0, 0.25, 0.5, 1.0, &n);
+	CHECK("sphere-perspective", e < 0.05 && n > 300, "error %g over %d "
+	      "pixels", e, n);
+	e = worst(&ortho, CYLINDER, 0, 0.25, 0.5, 0.5, &n);
+	CHECK("cylinder", e < 0.05 && n > 500, "error %g over %d pixels", e, n);
+	e = worst(&ortho, BOWL, 0, 0.25, 0.6, -1.0, &n);
+	CHECK("bowl-concave", e < 0.03 && n > 500, "error %g over %d pixels",
+	      e, n);
+	const double tilts[] = {0.0, 0.5, 1.2};
+	for (int k = 0; k < 3; k++) {
+		e = worst(&ortho, PLANE, tilts[k], 0.25, 10.0, 0.0, &n);
+		CHECK("plane-flat", e < 1e-3 && n > 7000, "tilt %g: |H| %g",
+		      tilts[k], e);
+		e = worst(&persp, PLANE, tilts[k], 0.25, 10.0, 0.0, &n);
+		CHECK("plane-flat-perspective", e < 1e-3, "tilt %g: |H| %g",
+		      tilts[k], e);
+	}
+	/* Near the silhouette the circle shrinks until it fits: still finite
+	 * everywhere (worst() flags a NaN as infinite), and the sphere's
+	 * curvature up to 0.9 radii out. */
+	e = worst(&ortho, SPHERE, 0, 0.5, 0.9, 1.0, &n);
+	CHECK("sphere-rim", e < 0.1, "error %g", e);
+	/* A circle far wider than the object, or a NaN or zero scale. */
+	float z[N * N];
+	int16_t slot[N * N];
+	make_depth(&ortho, SPHERE, 0, z, slot);
+	sss_image depth = {z, N, N, 1, 0};
+	double h = sss__mean_curvature(&depth, slot, &ortho, N, N, N / 2, N / 2,
+	                               1e6);
+	CHECK("huge-circle", fabs(h - 1.0) < 0.03, "%g", h);
+	CHECK("bad-scale", sss__mean_curvature(&depth, slot, &ortho, N, N, N / 2,
+	                                       N / 2, NAN) == 0.0 &&
+	      sss__mean_curvature(&depth, slot, &ortho, N, N, N / 2, N / 2,
+	                          0.0) == 0.0, "not 0");
+	/* A lone pixel tells nothing. */
+	for (int i = 0; i < N * N; i++)
+		slot[i] = -1;
+	slot[N * N / 2 + N / 2] = 0;
+	CHECK("lone-pixel", sss__mean_curvature(&depth, slot, &ortho, N, N,
+	                                        N / 2, N / 2, 0.25) == 0.0,
+	      "not 0");
+}
+
+static void test_table(void)
+{
+	const int32_t shaped[] = {SSS_CALIBRATION_CYCLES_RANDOM_WALK,
+	                          SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN,
+	                          SSS_CALIBRATION_CYCLES4_RANDOM_WALK};
+	int flat = 1, finite = 1, continuous = 1;
+	for (int k = 0; k < 3; k++)
+		for (int i = 0; i <= 100; i++) {
+			float a = (float)i / 100.0f, prev = 1.0f;
+			flat &= sss__shape_gain(shaped[k], a, 0.0f) == 1.0f &&
+			        sss__shape_gain(shaped[k], a, -3.0f) == 1.0f &&
+			        sss__shape_gain(shaped[k], a, NAN) == 1.0f;
+			/* 20 steps a decade from 1e-4 to 1e3 */
+			for (int j = 0; j <= 140; j++) {
+				float x = 1e-4f * powf(10.0f, (float)j / 20.0f);
+				float g = sss__shape_gain(shaped[k], a, x);
+				finite &= isfinite(g) && g > 0.05f && g < 5.0f;
+				continuous &= fabsf(g - prev) < 0.2f;
+				prev = g;
+			}
+		}
+	CHECK("table-flat", flat, "a gain other than 1 on a flat or concave "
+	      "surface");
+	CHECK("table-finite", finite, "a gain outside (0.05, 5)");
+	CHECK("table-continuous", continuous, "a jump of 0.2 or more");
+	CHECK("table-none", sss__shape_gain(SSS_CALIBRATION_NONE, 0.5f, 1.0f) ==
+	      1.0f && sss__shape_gain(99, 0.5f, 1.0f) == 1.0f,
+	      "a shape gain without a calibration");
+	/* Measured: convex objects return more light at low albedo. */
+	CHECK("table-measured",
+	      sss__shape_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 0.05f,
+	                      0.3f) > 1.5f &&
+	      sss__shape_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 0.8f,
+	                      0.01f) < 1.01f, "not the measured table");
+}
+
+/* sss_apply on an orthographic sphere of radius 1 m under an even light:
+ * the blur keeps the even light, so the middle pixel (seen head-on) is
+ * the light times g(A, 1) times the shape gain at x = radius. */
+static void test_apply(void)
+{
+	sss__projection p = projection(1);
+	float *dd = malloc(sizeof(float) * 3 * N * N);
+	float *col = malloc(sizeof(float) * 3 * N * N);
+	float *z = malloc(sizeof(float) * N * N);
+	float *idx = malloc(sizeof(float) * N * N);
+	float *out = malloc(sizeof(float) * 3 * N * N);
+	int16_t *slot = malloc(sizeof(int16_t) * N * N);
+	const float a3[3] = {0.2f, 0.5f, 0.8f};
+	make_depth(&p, SPHERE, 0, z, slot);
+	for (int i = 0; i < N * N; i++) {
+		idx[i] = slot[i] >= 0 ? 1.0f : 0.0f;
+		if (slot[i] < 0)
+			z[i] = 1e10f;
+		for (int c = 0; c < 3; c++) {
+			dd[3 * i + c] = 2.0f;
+			col[3 * i + c] = a3[c];
+		}
+	}
+	sss_passes ps;
+	memset(&ps, 0, sizeof ps);
+	ps.diff_dir = (sss_image){dd, N, N, 3, 0};
+	ps.diff_col = (sss_image){col, N, N, 3, 0};
+	ps.depth = (sss_image){z, N, N, 1, 0};
+	ps.index_ma = (sss_image){idx, N, N, 1, 0};
+	sss_camera cam;
+	sss_camera_default(&cam);
+	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam.ortho_scale = SPAN;
+	sss_options opt;
+	sss_options_default(&opt);
+	opt.num_threads = 1;
+	const float radii[] = {0.03f, 0.3f, 1.0f, 30.0f};
+	for (int k = 0; k < 4; k++) {
+		sss_material m;
+		sss_material_default(&m, SSS_PROFILE_BURLEY);
+		m.pass_index = 1;
+		m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+		m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+		memcpy(m.albedo, a3, sizeof a3);
+		m.radius[0] = m.radius[1] = m.radius[2] = radii[k];
+		sss_image ol = {out, N, N, 3, 0};
+		CHECK_STATUS("apply-status", SSS_OK,
+		             sss_apply(&ps, &cam, &m, 1, &opt, NULL, &ol, NULL, 0));
+		float g[3];
+		sss_calibration_gain(m.calibration, a3, 1.0f, g);
+		const float *o = out + 3 * (N * (N / 2) + N / 2);
+		for (int c = 0; c < 3; c++) {
+			double want = 2.0 * g[c] *
+			              sss__shape_gain(m.calibration, a3[c], radii[k]);
+			CHECK("apply-sphere", fabs(o[c] / want - 1.0) < 0.02,
+			      "radius %g channel %d: %g, expected %g",
+			      (double)radii[k], c, (double)o[c], want);
+		}
+		/* Half a radius out the view is 30 degrees off the normal: the
+		 * flat gain there, times the shape's rise scaled by the view
+		 * cosine (a fall counts in full). */
+		int x = N / 2 + (int)(0.5 * N / SPAN), y = N / 2;
+		float mu = sss__view_cosine(&ps.depth, slot, &p, N, N, x, y);
+		double H = sss__mean_curvature(&ps.depth, slot, &p, N, N, x, y,
+		                               radii[k]);
+		sss_calibration_gain(m.calibration, a3, mu, g);
+		o = out + 3 * (N * y + x);
+		for (int c = 0; c < 3; c++) {
+			double sg = sss__shape_gain(m.calibration, a3[c],
+			                            (float)(H * radii[k]));
+			double want = 2.0 * g[c] * (sg > 1.0 ? 1.0 + mu * (sg - 1.0)
+			                                     : sg);
+			CHECK("apply-sphere-view", fabs(o[c] / want - 1.0) < 1e-4 &&
+			      fabs(mu - 0.866) < 0.03 && fabs(H - 1.0) < 0.03,
+			      "radius %g channel %d: %g, expected %g (mu %g, H %g)",
+			      (double)radii[k], c, (double)o[c], want, (double)mu, H);
+		}
+	}
+	free(dd);
+	free(col);
+	free(z);
+	free(idx);
+	free(out);
+	free(slot);
+}
+
+/* A rise counts times the view cosine, a fall in full; no shape, no
+ * change. */
+static void test_rise_and_fall(void)
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+	const float fade[3] = {1, 1, 1}, col[3] = {0.3f, 0.5f, 0.8f};
+	const float rise[3] = {1, 1, 1}, fall[3] = {100, 100, 100};
+	const float mu = 0.6f;
+	float g[3];
+	sss_calibration_gain(m.calibration, col, mu, g);
+	float up[3] = {1, 1, 1}, down[3] = {1, 1, 1}, flat[3] = {1, 1, 1};
+	sss__calibration_apply(&m, fade, mu, rise, col, up);
+	sss__calibration_apply(&m, fade, mu, fall, col, down);
+	sss__calibration_apply(&m, fade, mu, NULL, col, flat);
+	for (int c = 0; c < 3; c++) {
+		float sr = sss__shape_gain(m.calibration, col[c], 1.0f);
+		float sf = sss__shape_gain(m.calibration, col[c], 100.0f);
+		CHECK("rise-times-view", sr > 1.0f &&
+		      fabsf(up[c] - g[c] * (1.0f + mu * (sr - 1.0f))) < 1e-6f,
+		      "channel %d: %g", c, (double)up[c]);
+		CHECK("fall-in-full", sf < 1.0f && fabsf(down[c] - g[c] * sf) < 1e-6f,
+		      "channel %d: %g", c, (double)down[c]);
+		CHECK("no-shape", flat[c] == g[c], "channel %d", c);
+	}
+}
+
+/* A material lit from behind (a back-light pass and transmission on)
+ * does not follow the shape: the back-lit transmission stands for what a
+ * finite object adds, and both counted that light twice. With no back
+ * light at all, the same material does. */
+static void test_backlit(void)
+{
+	sss__projection p = projection(1);
+	float *dd = malloc(sizeof(float) * 3 * N * N);
+	float *col = malloc(sizeof(float) * 3 * N * N);
+	float *z = malloc(sizeof(float) * N * N);
+	float *idx = malloc(sizeof(float) * N * N);
+	float *back = calloc(3 * N * N, sizeof(float));
+	float *thick = malloc(sizeof(float) * N * N);
+	float *out = malloc(sizeof(float) * 3 * N * N);
+	int16_t *slot = malloc(sizeof(int16_t) * N * N);
+	const float a3[3] = {0.2f, 0.5f, 0.8f};
+	make_depth(&p, SPHERE, 0, z, slot);
+	for (int i = 0; i < N * N; i++) {
+		idx[i] = slot[i] >= 0 ? 1.0f : 0.0f;
+		z[i] = slot[i] >= 0 ? z[i] : 1e10f;
+		thick[i] = 2.0f; /* the sphere's diameter: no light crosses */
+		for (int c = 0; c < 3; c++) {
+			dd[3 * i + c] = 2.0f;
+			col[3 * i + c] = a3[c];
+		}
+	}
+	sss_passes ps;
+	memset(&ps, 0, sizeof ps);
+	ps.diff_dir = (sss_image){dd, N, N, 3, 0};
+	ps.diff_col = (sss_image){col, N, N, 3, 0};
+	ps.depth = (sss_image){z, N, N, 1, 0};
+	ps.index_ma = (sss_image){idx, N, N, 1, 0};
+	sss_camera cam;
+	sss_camera_default(&cam);
+	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam.ortho_scale = SPAN;
+	sss_options opt;
+	sss_options_default(&opt);
+	opt.num_threads = 1;
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	m.transmission = SSS_TRANSMISSION_BURLEY;
+	memcpy(m.albedo, a3, sizeof a3);
+	m.radius[0] = m.radius[1] = m.radius[2] = 0.3f;
+	sss_image ol = {out, N, N, 3, 0};
+	float g[3];
+	sss_calibration_gain(m.calibration, a3, 1.0f, g);
+	const float *o = out + 3 * (N * (N / 2) + N / 2);
+	for (int lit = 0; lit < 2; lit++) {
+		if (lit) {
+			ps.back_dir = (sss_image){back, N, N, 3, 0};
+			ps.thickness = (sss_image){thick, N, N, 1, 0};
+		}
+		CHECK_STATUS("backlit-status", SSS_OK,
+		             sss_apply(&ps, &cam, &m, 1, &opt, NULL, &ol, NULL, 0));
+		for (int c = 0; c < 3; c++) {
+			double want = 2.0 * g[c] *
+			              (lit ? 1.0 : sss__shape_gain(m.calibration,
+			                                           a3[c], 0.3f));
+			CHECK("backlit-shape", fabs(o[c] / want - 1.0) < 0.02,
+			      "back light %d, channel %d: %g, expected %g", lit, c,
+			      (double)o[c], want);
+		}
+	}
+	free(dd);
+	free(col);
+	free(z);
+	free(idx);
+	free(back);
+	free(thick);
+	free(out);
+	free(slot);
+}
+
+int main(void)
+{
+	test_curvature();
+	test_table();
+	test_apply();
+	test_rise_and_fall();
+	test_backlit();
+	return tu_finish("test_shape");
+}
