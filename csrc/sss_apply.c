@@ -496,13 +496,18 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	if (opt.method == SSS_METHOD_SEPARABLE) /* reads colour planes */
 		job.signal_px = 1, job.signal_ch = (int64_t)npix;
 
+	rows_ctx rc = {
+		.p = p, .materials = materials, .kernels = kernels,
+		.by_index = by_index, .transmission = transmission,
+		.background_depth = opt.background_depth, .w = w, .h = h,
+		.proj = &job.proj, .signal = signal, .signal_px = job.signal_px,
+		.signal_ch = job.signal_ch, .slot = slot,
+		.out_combined = out_combined, .out_diffuse_light = out_diffuse_light,
+	};
 	/* Materials whose calibration follows the shape need the curvature
-	 * map (shape_follows). */
+	 * map. */
 	for (int32_t m = 0; m < material_count; m++)
-		if (kernels[m].support > 0.0 &&
-		    sss__calibration_needs_shape(&materials[m],
-		                                 kernels[m].calibration_fade) &&
-		    !sss__transmission_active(transmission, m)) {
+		if (kernels[m].support > 0.0 && shape_follows(&rc, (int16_t)m)) {
 			curvature = malloc((size_t)((w + CURVATURE_BLOCK - 1) /
 			                            CURVATURE_BLOCK) *
 			                   ((h + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK) *
@@ -514,16 +519,7 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 			}
 			break;
 		}
-
-	rows_ctx rc = {
-		.p = p, .materials = materials, .kernels = kernels,
-		.curvature = curvature,
-		.by_index = by_index, .transmission = transmission,
-		.background_depth = opt.background_depth, .w = w, .h = h,
-		.proj = &job.proj, .signal = signal, .signal_px = job.signal_px,
-		.signal_ch = job.signal_ch, .slot = slot,
-		.out_combined = out_combined, .out_diffuse_light = out_diffuse_light,
-	};
+	rc.curvature = curvature;
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
 
 	if (material_count > 0) {

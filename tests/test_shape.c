@@ -196,57 +196,95 @@ static void test_table(void)
 	                      0.01f) < 1.01f, "not the measured table");
 }
 
-/* sss_apply on an orthographic sphere of radius 1 m under an even light:
- * the blur keeps the even light, so the middle pixel (seen head-on) is
- * the light times g(A, 1) times the shape gain at x = radius. */
-static void test_apply(void)
+/* An orthographic sphere of radius 1 m under an even light of 2, DiffCol
+ * a3, with a back-light pass (no light, the sphere's diameter as
+ * thickness) that a test may hand to sss_apply. */
+typedef struct sphere_frame {
+	sss__projection proj;
+	float *dd, *col, *z, *idx, *back, *thick, *out;
+	int16_t *slot;
+	sss_passes ps;
+	sss_camera cam;
+	sss_options opt;
+} sphere_frame;
+
+static void sphere_frame_make(sphere_frame *f, const float a3[3])
 {
-	sss__projection p = projection(1);
-	float *dd = malloc(sizeof(float) * 3 * N * N);
-	float *col = malloc(sizeof(float) * 3 * N * N);
-	float *z = malloc(sizeof(float) * N * N);
-	float *idx = malloc(sizeof(float) * N * N);
-	float *out = malloc(sizeof(float) * 3 * N * N);
-	int16_t *slot = malloc(sizeof(int16_t) * N * N);
-	const float a3[3] = {0.2f, 0.5f, 0.8f};
-	make_depth(&p, SPHERE, 0, z, slot);
+	f->proj = projection(1);
+	f->dd = malloc(sizeof(float) * 3 * N * N);
+	f->col = malloc(sizeof(float) * 3 * N * N);
+	f->z = malloc(sizeof(float) * N * N);
+	f->idx = malloc(sizeof(float) * N * N);
+	f->back = calloc(3 * N * N, sizeof(float));
+	f->thick = malloc(sizeof(float) * N * N);
+	f->out = malloc(sizeof(float) * 3 * N * N);
+	f->slot = malloc(sizeof(int16_t) * N * N);
+	make_depth(&f->proj, SPHERE, 0, f->z, f->slot);
 	for (int i = 0; i < N * N; i++) {
-		idx[i] = slot[i] >= 0 ? 1.0f : 0.0f;
-		if (slot[i] < 0)
-			z[i] = 1e10f;
+		f->idx[i] = f->slot[i] >= 0 ? 1.0f : 0.0f;
+		if (f->slot[i] < 0)
+			f->z[i] = 1e10f;
+		f->thick[i] = 2.0f; /* the sphere's diameter: no light crosses */
 		for (int c = 0; c < 3; c++) {
-			dd[3 * i + c] = 2.0f;
-			col[3 * i + c] = a3[c];
+			f->dd[3 * i + c] = 2.0f;
+			f->col[3 * i + c] = a3[c];
 		}
 	}
-	sss_passes ps;
-	memset(&ps, 0, sizeof ps);
-	ps.diff_dir = (sss_image){dd, N, N, 3, 0};
-	ps.diff_col = (sss_image){col, N, N, 3, 0};
-	ps.depth = (sss_image){z, N, N, 1, 0};
-	ps.index_ma = (sss_image){idx, N, N, 1, 0};
-	sss_camera cam;
-	sss_camera_default(&cam);
-	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
-	cam.ortho_scale = SPAN;
-	sss_options opt;
-	sss_options_default(&opt);
-	opt.num_threads = 1;
+	memset(&f->ps, 0, sizeof f->ps);
+	f->ps.diff_dir = (sss_image){f->dd, N, N, 3, 0};
+	f->ps.diff_col = (sss_image){f->col, N, N, 3, 0};
+	f->ps.depth = (sss_image){f->z, N, N, 1, 0};
+	f->ps.index_ma = (sss_image){f->idx, N, N, 1, 0};
+	sss_camera_default(&f->cam);
+	f->cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	f->cam.ortho_scale = SPAN;
+	sss_options_default(&f->opt);
+	f->opt.num_threads = 1;
+}
+
+static void sphere_frame_free(sphere_frame *f)
+{
+	free(f->dd);
+	free(f->col);
+	free(f->z);
+	free(f->idx);
+	free(f->back);
+	free(f->thick);
+	free(f->out);
+	free(f->slot);
+}
+
+/* Burley matched to 4.x's Random Walk (Skin), radius r m, albedo a3. */
+static sss_material skin_walk(float r, const float a3[3])
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	memcpy(m.albedo, a3, 3 * sizeof *a3);
+	m.radius[0] = m.radius[1] = m.radius[2] = r;
+	return m;
+}
+
+/* sss_apply on the sphere: the blur keeps the even light, so the middle
+ * pixel (seen head-on) is the light times g(A, 1) times the shape gain at
+ * x = radius. */
+static void test_apply(void)
+{
+	const float a3[3] = {0.2f, 0.5f, 0.8f};
+	sphere_frame f;
+	sphere_frame_make(&f, a3);
 	const float radii[] = {0.03f, 0.3f, 1.0f, 30.0f};
 	for (int k = 0; k < 4; k++) {
-		sss_material m;
-		sss_material_default(&m, SSS_PROFILE_BURLEY);
-		m.pass_index = 1;
-		m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
-		m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
-		memcpy(m.albedo, a3, sizeof a3);
-		m.radius[0] = m.radius[1] = m.radius[2] = radii[k];
-		sss_image ol = {out, N, N, 3, 0};
+		sss_material m = skin_walk(radii[k], a3);
+		sss_image ol = {f.out, N, N, 3, 0};
 		CHECK_STATUS("apply-status", SSS_OK,
-		             sss_apply(&ps, &cam, &m, 1, &opt, NULL, &ol, NULL, 0));
+		             sss_apply(&f.ps, &f.cam, &m, 1, &f.opt, NULL, &ol,
+		                       NULL, 0));
 		float g[3];
 		sss_calibration_gain(m.calibration, a3, 1.0f, g);
-		const float *o = out + 3 * (N * (N / 2) + N / 2);
+		const float *o = f.out + 3 * (N * (N / 2) + N / 2);
 		for (int c = 0; c < 3; c++) {
 			double want = 2.0 * g[c] *
 			              fmax(sss__shape_gain(m.calibration, a3[c],
@@ -259,11 +297,12 @@ static void test_apply(void)
 		 * flat gain there, times the shape's rise scaled by the view
 		 * cosine (no fall). */
 		int x = N / 2 + (int)(0.5 * N / SPAN), y = N / 2;
-		float mu = sss__view_cosine(&ps.depth, slot, &p, N, N, x, y);
-		double H = sss__mean_curvature(&ps.depth, slot, &p, N, N, x, y,
-		                               radii[k]);
+		float mu = sss__view_cosine(&f.ps.depth, f.slot, &f.proj, N, N, x,
+		                            y);
+		double H = sss__mean_curvature(&f.ps.depth, f.slot, &f.proj, N, N,
+		                               x, y, radii[k]);
 		sss_calibration_gain(m.calibration, a3, mu, g);
-		o = out + 3 * (N * y + x);
+		o = f.out + 3 * (N * y + x);
 		for (int c = 0; c < 3; c++) {
 			double sg = sss__shape_gain(m.calibration, a3[c],
 			                            (float)(H * radii[k]));
@@ -275,12 +314,7 @@ static void test_apply(void)
 			      (double)radii[k], c, (double)o[c], want, (double)mu, H);
 		}
 	}
-	free(dd);
-	free(col);
-	free(z);
-	free(idx);
-	free(out);
-	free(slot);
+	sphere_frame_free(&f);
 }
 
 /* A rise counts times the view cosine; a fall (the object's thickness,
@@ -317,58 +351,23 @@ static void test_rise_and_fall(void)
  * light at all, the same material does. */
 static void test_backlit(void)
 {
-	sss__projection p = projection(1);
-	float *dd = malloc(sizeof(float) * 3 * N * N);
-	float *col = malloc(sizeof(float) * 3 * N * N);
-	float *z = malloc(sizeof(float) * N * N);
-	float *idx = malloc(sizeof(float) * N * N);
-	float *back = calloc(3 * N * N, sizeof(float));
-	float *thick = malloc(sizeof(float) * N * N);
-	float *out = malloc(sizeof(float) * 3 * N * N);
-	int16_t *slot = malloc(sizeof(int16_t) * N * N);
 	const float a3[3] = {0.2f, 0.5f, 0.8f};
-	make_depth(&p, SPHERE, 0, z, slot);
-	for (int i = 0; i < N * N; i++) {
-		idx[i] = slot[i] >= 0 ? 1.0f : 0.0f;
-		z[i] = slot[i] >= 0 ? z[i] : 1e10f;
-		thick[i] = 2.0f; /* the sphere's diameter: no light crosses */
-		for (int c = 0; c < 3; c++) {
-			dd[3 * i + c] = 2.0f;
-			col[3 * i + c] = a3[c];
-		}
-	}
-	sss_passes ps;
-	memset(&ps, 0, sizeof ps);
-	ps.diff_dir = (sss_image){dd, N, N, 3, 0};
-	ps.diff_col = (sss_image){col, N, N, 3, 0};
-	ps.depth = (sss_image){z, N, N, 1, 0};
-	ps.index_ma = (sss_image){idx, N, N, 1, 0};
-	sss_camera cam;
-	sss_camera_default(&cam);
-	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
-	cam.ortho_scale = SPAN;
-	sss_options opt;
-	sss_options_default(&opt);
-	opt.num_threads = 1;
-	sss_material m;
-	sss_material_default(&m, SSS_PROFILE_BURLEY);
-	m.pass_index = 1;
-	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
-	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	sphere_frame f;
+	sphere_frame_make(&f, a3);
+	sss_material m = skin_walk(0.3f, a3);
 	m.transmission = SSS_TRANSMISSION_BURLEY;
-	memcpy(m.albedo, a3, sizeof a3);
-	m.radius[0] = m.radius[1] = m.radius[2] = 0.3f;
-	sss_image ol = {out, N, N, 3, 0};
+	sss_image ol = {f.out, N, N, 3, 0};
 	float g[3];
 	sss_calibration_gain(m.calibration, a3, 1.0f, g);
-	const float *o = out + 3 * (N * (N / 2) + N / 2);
+	const float *o = f.out + 3 * (N * (N / 2) + N / 2);
 	for (int lit = 0; lit < 2; lit++) {
 		if (lit) {
-			ps.back_dir = (sss_image){back, N, N, 3, 0};
-			ps.thickness = (sss_image){thick, N, N, 1, 0};
+			f.ps.back_dir = (sss_image){f.back, N, N, 3, 0};
+			f.ps.thickness = (sss_image){f.thick, N, N, 1, 0};
 		}
 		CHECK_STATUS("backlit-status", SSS_OK,
-		             sss_apply(&ps, &cam, &m, 1, &opt, NULL, &ol, NULL, 0));
+		             sss_apply(&f.ps, &f.cam, &m, 1, &f.opt, NULL, &ol,
+		                       NULL, 0));
 		for (int c = 0; c < 3; c++) {
 			double want = 2.0 * g[c] *
 			              (lit ? 1.0 : sss__shape_gain(m.calibration,
@@ -378,14 +377,7 @@ static void test_backlit(void)
 			      (double)o[c], want);
 		}
 	}
-	free(dd);
-	free(col);
-	free(z);
-	free(idx);
-	free(back);
-	free(thick);
-	free(out);
-	free(slot);
+	sphere_frame_free(&f);
 }
 
 int main(void)
