@@ -126,8 +126,30 @@ typedef struct radii {
 	int16_t slot;
 	int32_t n;
 	double mass;
-	double r[4096], pdf[4096];
+	double r[4096], inv_pdf[4096]; /* 0 where the pdf is 0 */
 } radii;
+
+/* The squared part of the 3-D distance from the centre to pixel (qx, qy)
+ * that is not across the screen. From depth alone the lateral parts
+ * cancel and it is the depth difference squared; with a Position pass,
+ * |P - C|^2 minus the lateral part. */
+static double off_screen_distance2(const sss__job *job, int32_t qx,
+                                   int32_t qy, const double centre[3],
+                                   const double lc[2])
+{
+	double zq = depth_at(job, qx, qy);
+	if (!job->position) {
+		double dz = zq - centre[2];
+		return dz * dz;
+	}
+	double p[3], lq[2];
+	sss__pixel_position(job, qx, qy, p);
+	lateral(job, qx, qy, zq, lq);
+	double dx = p[0] - centre[0], dy = p[1] - centre[1],
+	       dz = p[2] - centre[2];
+	double ax = lq[0] - lc[0], ay = lq[1] - lc[1];
+	return (dx * dx + dy * dy + dz * dz) - (ax * ax + ay * ay);
+}
 
 static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
                        int32_t y, radii *cache, float *out)
@@ -164,8 +186,9 @@ static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
 	if (cache->slot != slot || cache->n != n || cache->mass != mass) {
 		for (int32_t i = 0; i < n; i++) {
 			double r = inverse_lookup(cdf, k->support, (i + 0.5) / n * mass);
+			double pdf = sss__table_lookup(k->area[sc], r, inv_support);
 			cache->r[i] = r;
-			cache->pdf[i] = sss__table_lookup(k->area[sc], r, inv_support);
+			cache->inv_pdf[i] = pdf > 0.0 ? 1.0 / pdf : 0.0;
 		}
 		cache->slot = slot;
 		cache->n = n;
@@ -175,8 +198,8 @@ static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
 	double cr = cos(rot), sr = sin(rot);
 	double acc[3] = {0, 0, 0}, wsum[3] = {0, 0, 0};
 	for (int32_t i = 0; i < n; i++) {
-		double r = cache->r[i], pdf = cache->pdf[i];
-		if (!(pdf > 0.0))
+		double r = cache->r[i], inv_pdf = cache->inv_pdf[i];
+		if (!(inv_pdf > 0.0))
 			continue;
 		/* cos, sin of 2 pi frac(i / golden) + rot */
 		double c0 = ctx->base[2 * i], s0 = ctx->base[2 * i + 1];
@@ -190,24 +213,27 @@ static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
 			continue;
 		double r3 = r;
 		if (qx != x || qy != y) {
-			double p[3], lq[2];
-			sss__pixel_position(job, qx, qy, p);
-			lateral(job, qx, qy, depth_at(job, qx, qy), lq);
-			double dx = p[0] - centre[0], dy = p[1] - centre[1],
-			       dz = p[2] - centre[2];
-			double ax = lq[0] - lc[0], ay = lq[1] - lc[1];
-			double e2 = (dx * dx + dy * dy + dz * dz) - (ax * ax + ay * ay);
+			double e2 = off_screen_distance2(job, qx, qy, centre, lc);
 			if (e2 > 0.0)
 				r3 = sqrt(r * r + e2);
 		}
 		if (!(r3 < k->support))
 			continue;
 		const float *v = job->signal + 3 * j;
+		/* sss__table_lookup's interpolation, one square root for all
+		 * three channels. */
+		double u = sqrt(r3 * inv_support) * (SSS__TABLE_SIZE - 1);
+		int t = SSS__TABLE_SIZE - 2;
+		float f = 1.0f;
+		if (u < SSS__TABLE_SIZE - 1) {
+			t = (int)u;
+			f = (float)(u - t);
+		}
 		for (int c = 0; c < 3; c++) {
+			const float *a = k->area[c];
 			double wc = (c == sc && r3 == r)
 			            ? 1.0
-			            : sss__table_lookup(k->area[c], r3, inv_support) /
-			              pdf;
+			            : (double)(a[t] + f * (a[t + 1] - a[t])) * inv_pdf;
 			acc[c] += wc * v[c];
 			wsum[c] += wc;
 		}
