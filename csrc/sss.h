@@ -402,13 +402,17 @@ SSS_API sss_result sss_calibration_gain(int32_t calibration,
 /* --------------------------------------------------------------- options */
 
 enum sss_method {
-	SSS_METHOD_SEPARABLE = 0, /* two 1-D passes, all lobes at once */
-	SSS_METHOD_SEPARABLE_EXACT = 1, /* two 1-D passes per Gaussian lobe:
+	SSS_METHOD_AUTO = 0,      /* per material: separable, or disk where the
+	                             kernel is wide against the surface's
+	                             curvature (see sss_process_options'
+	                             chosen_methods) */
+	SSS_METHOD_SEPARABLE = 1, /* two 1-D passes, all lobes at once */
+	SSS_METHOD_SEPARABLE_EXACT = 2, /* two 1-D passes per Gaussian lobe:
 	                                   exact for sums of Gaussians; Burley
 	                                   is fitted with 6 lobes */
-	SSS_METHOD_DISK = 2,      /* stratified inverse-CDF disk sampling,
+	SSS_METHOD_DISK = 3,      /* stratified inverse-CDF disk sampling,
 	                             up to `samples` samples per pixel */
-	SSS_METHOD_REFERENCE = 3  /* brute-force 2-D, true distances: slow */
+	SSS_METHOD_REFERENCE = 4  /* brute-force 2-D, true distances: slow */
 };
 
 /* The method's name in scene descriptions and on the command line
@@ -618,6 +622,11 @@ typedef struct sss_process_options {
 	 * options' own progress_fn is not used. */
 	void (*progress_fn)(const char *stage, double done, void *user);
 	void *progress_user;
+	/* Optional, one per scene material (sss_scene_materials' count):
+	 * receives the method each material ran this frame (SSS_METHOD_AUTO
+	 * resolved to the one it chose), -1 for a material not on screen or
+	 * that does not scatter. NULL = not told. */
+	int32_t *chosen_methods;
 } sss_process_options;
 
 typedef struct sss_timings {

@@ -13,6 +13,8 @@
 static const struct {
 	const char *name, *summary;
 } methods[] = {
+	[SSS_METHOD_AUTO] = {"auto", "Per material: separable, or disk where "
+		"the radius passes the curvature's"},
 	[SSS_METHOD_SEPARABLE] = {"separable", "Fastest: two 1-D passes"},
 	[SSS_METHOD_SEPARABLE_EXACT] = {"separable-exact", "Slower, exact for "
 		"Gaussian sums: two 1-D passes per lobe"},
@@ -346,12 +348,68 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 	}
 }
 
-sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
-                     const sss_material *materials, int32_t material_count,
-                     const sss_options *user_opt,
-                     const sss_image *out_combined,
-                     const sss_image *out_diffuse_light, char *errbuf,
-                     size_t errbuf_len)
+/* The auto method: the choice per material (sss_auto.c), then each
+ * method over its materials' pixels (the methods read only pixels of the
+ * slot they scatter, so the two runs do not meet). The signal is planar,
+ * as the separable method reads it, and packed before the disk method
+ * runs. */
+static sss_result run_auto(sss__job *job, rows_ctx *rc,
+                           const sss_image *depth, int32_t material_count,
+                           const sss_options *opt, int32_t *chosen)
+{
+	size_t npix = (size_t)job->width * job->height;
+	const int16_t *slot = job->slot;
+	sss_result r = sss__auto_methods(depth, slot, &job->proj, job->width,
+	                                 job->height, job->kernels,
+	                                 material_count, chosen, NULL);
+	if (r)
+		return r;
+	int uses[2] = {0, 0}; /* separable, disk */
+	for (size_t i = 0; i < npix; i++)
+		if (slot[i] >= 0)
+			uses[chosen[slot[i]] == SSS_METHOD_DISK] = 1;
+	int16_t *own = NULL;
+	if (uses[0] && uses[1] && !(own = malloc(npix * sizeof *own)))
+		return SSS_ERR_OUT_OF_MEMORY;
+	for (int d = 0; d < 2 && !r; d++) {
+		if (!uses[d])
+			continue;
+		if (own) {
+			int32_t method = d ? SSS_METHOD_DISK : SSS_METHOD_SEPARABLE;
+			for (size_t i = 0; i < npix; i++)
+				own[i] = slot[i] >= 0 && chosen[slot[i]] == method ? slot[i]
+				                                                   : -1;
+			job->slot = own;
+		}
+		if (!d) {
+			r = sss__separable(job, opt->num_threads);
+			continue;
+		}
+		/* Packed for the disk method, through the scratch buffer, which
+		 * nothing holds between the methods. */
+		for (size_t i = 0; i < npix; i++)
+			for (int c = 0; c < 3; c++)
+				job->scratch[3 * i + c] = job->signal[i + c * npix];
+		memcpy(job->signal, job->scratch, 3 * npix * sizeof *job->signal);
+		job->signal_px = rc->signal_px = 3;
+		job->signal_ch = rc->signal_ch = 1;
+		r = sss__disk(job, opt->samples, opt->num_threads);
+	}
+	job->slot = slot;
+	free(own);
+	return r;
+}
+
+/* sss_apply, and the method each material ran (chosen: one per material,
+ * -1 for one not on screen or that does not scatter; may be NULL). */
+sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
+                             const sss_material *materials,
+                             int32_t material_count,
+                             const sss_options *user_opt,
+                             const sss_image *out_combined,
+                             const sss_image *out_diffuse_light,
+                             int32_t *chosen, char *errbuf,
+                             size_t errbuf_len)
 {
 	sss_result r;
 	if (errbuf && errbuf_len)
@@ -432,6 +490,8 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	                              sizeof *kernels);
 	int16_t *by_index = malloc(65536 * sizeof *by_index);
 	int16_t *slot = malloc(npix * sizeof *slot);
+	int32_t *method_of = malloc((material_count ? material_count : 1) *
+	                            sizeof *method_of);
 	float *signal = malloc(npix * 3 * sizeof *signal);
 	float *scratch = packed_output(out_combined, out_diffuse_light);
 	float *own_scratch = NULL;
@@ -440,7 +500,8 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
 	                        sizeof *zrange);
-	if (!kernels || !by_index || !slot || !signal || !scratch || !zrange) {
+	if (!kernels || !by_index || !slot || !signal || !scratch || !zrange ||
+	    !method_of) {
 		r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working memory "
 		          "for a %dx%d image", w, h);
 		goto done;
@@ -493,7 +554,8 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		.signal = signal, .signal_px = 3, .signal_ch = 1,
 		.scratch = scratch,
 	};
-	if (opt.method == SSS_METHOD_SEPARABLE) /* reads colour planes */
+	if (opt.method == SSS_METHOD_SEPARABLE ||
+	    opt.method == SSS_METHOD_AUTO) /* reads colour planes */
 		job.signal_px = 1, job.signal_ch = (int64_t)npix;
 
 	rows_ctx rc = {
@@ -523,7 +585,12 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
 
 	if (material_count > 0) {
-		if (opt.method == SSS_METHOD_REFERENCE)
+		for (int32_t m = 0; m < material_count; m++)
+			method_of[m] = opt.method;
+		if (opt.method == SSS_METHOD_AUTO)
+			r = run_auto(&job, &rc, &p->depth, material_count, &opt,
+			             method_of);
+		else if (opt.method == SSS_METHOD_REFERENCE)
 			r = sss__reference(&job, opt.num_threads);
 		else if (opt.method == SSS_METHOD_SEPARABLE_EXACT)
 			r = sss__separable_exact(&job, materials, material_count, &opt);
@@ -542,6 +609,10 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 		sss__parallel_rows((h + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK,
 		                   opt.num_threads, curvature_rows, &rc);
 	sss__parallel_rows(h, opt.num_threads, composite_rows, &rc);
+	if (chosen)
+		for (int32_t m = 0; m < material_count; m++)
+			chosen[m] = by_index[materials[m].pass_index] == m
+			            ? method_of[m] : -1;
 	r = SSS_OK;
 done:
 	sss__transmission_free(transmission);
@@ -552,5 +623,17 @@ done:
 	free(curvature);
 	free(own_scratch);
 	free(zrange);
+	free(method_of);
 	return r;
+}
+
+sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
+                     const sss_material *materials, int32_t material_count,
+                     const sss_options *opt, const sss_image *out_combined,
+                     const sss_image *out_diffuse_light, char *errbuf,
+                     size_t errbuf_len)
+{
+	return sss__apply_report(p, cam, materials, material_count, opt,
+	                         out_combined, out_diffuse_light, NULL, errbuf,
+	                         errbuf_len);
 }

@@ -184,6 +184,28 @@ sss_result sss__separable_exact(const sss__job *job,
  * the truncated radial CDF (sss_lobes.c). Returns the lobe count. */
 #define SSS__BURLEY_LOBES 6
 int sss__burley_lobes(double truncate, double sigma[], double weight[]);
+/* SSS_METHOD_AUTO's choice per kernel (sss_auto.c): method[m] is
+ * SSS_METHOD_DISK where the median over kernel m's pixels of its widest
+ * walk radius x the surface's mean curvature reaches AUTO_DISK_X, else
+ * SSS_METHOD_SEPARABLE; median_x (optional) receives that median. Reads
+ * the slot map, so runs once it is filled. */
+#define AUTO_DISK_X 1.0f
+sss_result sss__auto_methods(const sss_image *depth, const int16_t *slot,
+                             const sss__projection *proj, int32_t w,
+                             int32_t h, const sss__kernel *kernels,
+                             int32_t count, int32_t *method,
+                             float *median_x);
+/* sss_apply, also telling the method each material ran (sss_apply.c):
+ * chosen, one per material, -1 for one not on screen or that does not
+ * scatter; may be NULL. */
+sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
+                             const sss_material *materials,
+                             int32_t material_count,
+                             const sss_options *opt,
+                             const sss_image *out_combined,
+                             const sss_image *out_diffuse_light,
+                             int32_t *chosen, char *errbuf,
+                             size_t errbuf_len);
 /* The stochastic disk method (sss_disk.c), at most `samples` per pixel. */
 sss_result sss__disk(const sss__job *job, int32_t samples,
                      int32_t num_threads);

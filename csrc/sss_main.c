@@ -38,7 +38,7 @@ static const char usage_text[] =
 "                          file or a pipe\n"
 "  -f, --frames LIST       frames for #### patterns: 1-240, 1-240x2, 7,9,12-20\n"
 "  -m, --method NAME       scattering method, one of those below (default:\n"
-"                          the scene's, else the first)\n"
+"                          the scene's, else auto)\n"
 "      --samples N         disk method: most samples per pixel, 1..4096\n"
 "                          (default: the scene's, else 64)\n"
 "  -r, --radius-scale F    multiply every radius by F >= 0 (0 = no scattering:\n"
@@ -105,6 +105,27 @@ static void print_usage(void)
 	}
 	fputs("\n", stdout);
 	fputs(usage_examples, stdout);
+}
+
+/* "  methods: Skin disk, Jade separable" when any material's method
+ * differs from the last frame's. */
+static void tell_methods(const sss_scene *scene, int32_t n,
+                         const int32_t *chosen, int32_t *told)
+{
+	if (memcmp(chosen, told, (size_t)n * sizeof *chosen) == 0)
+		return;
+	const char *sep = "  methods: ";
+	for (int32_t m = 0; m < n; m++) {
+		if (chosen[m] < 0)
+			continue;
+		const char *name = sss_scene_material_name(scene, m);
+		printf("%s%s %s", sep, name && *name ? name : "(unnamed)",
+		       sss_method_name(chosen[m]));
+		sep = ", ";
+	}
+	if (sep[0] == ',')
+		putchar('\n');
+	memcpy(told, chosen, (size_t)n * sizeof *chosen);
 }
 
 /* The method named `name`, or -1. */
@@ -546,6 +567,17 @@ int main(int argc, char **argv)
 	if (a.compression >= 0)
 		po.exr.compression = a.compression;
 	po.exr.temporary_fn = on_temporary;
+	/* The method each material ran, told when it changes (auto chooses
+	 * per frame). */
+	int32_t nmat = 0;
+	sss_scene_materials(scene, &nmat);
+	int32_t *chosen = calloc(2 * (size_t)(nmat > 0 ? nmat : 1),
+	                         sizeof *chosen);
+	int32_t *told = chosen ? chosen + (nmat > 0 ? nmat : 1) : NULL;
+	if (told)
+		for (int32_t m = 0; m < nmat; m++)
+			told[m] = -2;
+	po.chosen_methods = chosen;
 	sss_timings total = {0, 0, 0};
 	for (int i = 0; i < frames.count; i++) {
 		char in[4096], out[4096];
@@ -589,6 +621,8 @@ int main(int argc, char **argv)
 		} else if (!a.quiet) {
 			printf("%s -> %s: read %.3f s, sss %.3f s, write %.3f s\n", in,
 			       out, t.read, t.scatter, t.write);
+			if (chosen)
+				tell_methods(scene, nmat, chosen, told);
 			fflush(stdout);
 		}
 		total.read += t.read;
@@ -603,6 +637,7 @@ int main(int argc, char **argv)
 		       frames.count - failed - skipped, skipped, failed, total.read,
 		       total.scatter, total.write);
 	sss_scene_free(scene);
+	free(chosen);
 	if (frames.frames != &single)
 		free(frames.frames);
 	/* A report that could not be written (a full disk, a closed pipe) is

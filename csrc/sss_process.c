@@ -202,8 +202,9 @@ sss_result sss_process_exr(const char *in, const char *out,
 	char detail[512];
 	tell(&prog, "scatter", 0.0);
 	t0 = now();
-	r = sss_apply(&passes, sss_scene_camera(scene), mats, count, &o, &oc, &ol,
-	              detail, sizeof detail);
+	r = sss__apply_report(&passes, sss_scene_camera(scene), mats, count, &o,
+	                      &oc, &ol, opt.chosen_methods, detail,
+	                      sizeof detail);
 	t.scatter = now() - t0;
 	if (r) {
 		sss__fail(err, errlen, r, "%s (layer '%s'): %s: %s", in, layer,

@@ -75,7 +75,7 @@ void sss_options_default(sss_options *opt)
 		return;
 	memset(opt, 0, sizeof *opt);
 	opt->struct_size = sizeof *opt;
-	opt->method = SSS_METHOD_SEPARABLE;
+	opt->method = SSS_METHOD_AUTO;
 	opt->radius_scale = 1.0f;
 	opt->taps = 33;
 	opt->num_threads = 0;

@@ -78,7 +78,7 @@ def default_method(folder):
     path = os.path.join(folder, "summary.txt")
     text = open(path).read() if os.path.exists(path) else ""
     m = re.search(r"default method (\S+)", text)
-    return m.group(1) if m else "separable"
+    return m.group(1) if m else "auto"
 
 
 def pick(rows, method, samples=None):

@@ -4,7 +4,9 @@
  * tables (1 on flat and concave surfaces and without a calibration,
  * finite, continuous in x), how a rise and a fall apply, and sss_apply
  * on a sphere, whose middle gets the flat gain times the table's at
- * radius / a, unless light also comes from behind. */
+ * radius / a, unless light also comes from behind; and the auto method,
+ * which runs the disk method where the radius reaches the curvature
+ * radius and the separable method elsewhere, each as if run alone. */
 #include "sss_internal.h"
 #include "test_util.h"
 
@@ -380,6 +382,107 @@ static void test_backlit(void)
 	sphere_frame_free(&f);
 }
 
+/* One run of `method` on the frame: the diffuse light into out, the
+ * method each material ran into chosen. */
+static sss_result run_method(sphere_frame *f, const sss_material *m,
+                             int32_t count, int32_t method, float *out,
+                             int32_t *chosen)
+{
+	sss_options o = f->opt;
+	o.method = method;
+	sss_image ol = {out, N, N, 3, 0};
+	return sss__apply_report(&f->ps, &f->cam, m, count, &o, NULL, &ol,
+	                         chosen, NULL, 0);
+}
+
+/* Whether out equals want exactly on the pixels of pass index idx. */
+static int same_on(const sphere_frame *f, const float *out,
+                   const float *want, float idx)
+{
+	for (int i = 0; i < N * N; i++)
+		if (f->idx[i] == idx &&
+		    memcmp(out + 3 * i, want + 3 * i, 3 * sizeof *out) != 0)
+			return 0;
+	return 1;
+}
+
+/* auto on the sphere (radius a = 1) under light with detail, so that the
+ * methods differ: x = radius / a below 1 runs separable, from 1 disk,
+ * each exactly as when asked for; with two materials, one of each, each
+ * half is its own method's (the signal is planar for the one and packed
+ * for the other); a flat plane is separable at any radius; a material
+ * not on screen reports -1. */
+static void test_auto(void)
+{
+	const float a3[3] = {0.3f, 0.5f, 0.7f};
+	sphere_frame f;
+	sphere_frame_make(&f, a3);
+	for (int i = 0; i < N * N; i++)
+		for (int c = 0; c < 3; c++)
+			f.dd[3 * i + c] = (float)(1.0 + 0.8 * sin(0.7 * (i % N) + c) *
+			                          cos(0.45 * (i / N)));
+	float *a = malloc(sizeof(float) * 3 * N * N);
+	float *b = malloc(sizeof(float) * 3 * N * N);
+	const struct {
+		float radius;
+		int32_t method;
+	} cases[] = {{0.05f, SSS_METHOD_SEPARABLE}, {0.5f, SSS_METHOD_SEPARABLE},
+	             {1.5f, SSS_METHOD_DISK}, {20.0f, SSS_METHOD_DISK}};
+	for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+		sss_material m[2] = {skin_walk(cases[k].radius, a3),
+		                     skin_walk(0.1f, a3)};
+		m[1].pass_index = 7; /* not on screen */
+		int32_t chosen[2] = {-5, -5}, alone[2];
+		CHECK_STATUS("auto-status", SSS_OK,
+		             run_method(&f, m, 2, SSS_METHOD_AUTO, a, chosen));
+		CHECK_STATUS("auto-alone-status", SSS_OK,
+		             run_method(&f, m, 2, cases[k].method, b, alone));
+		CHECK("auto-choice", chosen[0] == cases[k].method &&
+		      chosen[1] == -1 && alone[0] == cases[k].method,
+		      "radius %g: chose %d (expected %d), off screen %d",
+		      (double)cases[k].radius, chosen[0], cases[k].method,
+		      chosen[1]);
+		CHECK("auto-same", same_on(&f, a, b, 1.0f),
+		      "radius %g: auto differs from %s alone",
+		      (double)cases[k].radius, sss_method_name(cases[k].method));
+	}
+
+	/* Left half narrow, right half wide. */
+	for (int i = 0; i < N * N; i++)
+		if (f.idx[i] > 0.0f && i % N >= N / 2)
+			f.idx[i] = 2.0f;
+	sss_material two[2] = {skin_walk(0.1f, a3), skin_walk(4.0f, a3)};
+	two[1].pass_index = 2;
+	int32_t chosen[2];
+	CHECK_STATUS("auto-two-status", SSS_OK,
+	             run_method(&f, two, 2, SSS_METHOD_AUTO, a, chosen));
+	CHECK("auto-two-choice", chosen[0] == SSS_METHOD_SEPARABLE &&
+	      chosen[1] == SSS_METHOD_DISK, "chose %d, %d", chosen[0],
+	      chosen[1]);
+	for (int d = 0; d < 2; d++) {
+		int32_t method = d ? SSS_METHOD_DISK : SSS_METHOD_SEPARABLE;
+		CHECK_STATUS("auto-two-alone", SSS_OK,
+		             run_method(&f, two, 2, method, b, NULL));
+		CHECK("auto-two-same", same_on(&f, a, b, d ? 2.0f : 1.0f),
+		      "the %s half differs from %s alone", d ? "right" : "left",
+		      sss_method_name(method));
+	}
+
+	/* A plane facing the camera, every pixel scattering. */
+	for (int i = 0; i < N * N; i++) {
+		f.z[i] = 4.0f;
+		f.idx[i] = 1.0f;
+	}
+	sss_material wide = skin_walk(50.0f, a3);
+	CHECK_STATUS("auto-plane-status", SSS_OK,
+	             run_method(&f, &wide, 1, SSS_METHOD_AUTO, a, chosen));
+	CHECK("auto-plane", chosen[0] == SSS_METHOD_SEPARABLE,
+	      "a plane chose %d", chosen[0]);
+	free(a);
+	free(b);
+	sphere_frame_free(&f);
+}
+
 int main(void)
 {
 	test_curvature();
@@ -387,5 +490,6 @@ int main(void)
 	test_apply();
 	test_rise_and_fall();
 	test_backlit();
+	test_auto();
 	return tu_finish("test_shape");
 }

@@ -49,7 +49,8 @@ class ProcessOptions(ctypes.Structure):
                 ("exr", ExrOptions),
                 ("samples", ctypes.c_int32),
                 ("progress_fn", ProgressFn),
-                ("progress_user", ctypes.c_void_p)]
+                ("progress_user", ctypes.c_void_p),
+                ("chosen_methods", ctypes.POINTER(ctypes.c_int32))]
 
 
 class Image(ctypes.Structure):
@@ -119,6 +120,7 @@ def _declare(lib):
         "sss_scene_free": (None, [c.c_void_p]),
         "sss_scene_materials": (c.c_void_p, [c.c_void_p,
                                              c.POINTER(c.c_int32)]),
+        "sss_scene_material_name": (c.c_char_p, [c.c_void_p, c.c_int32]),
         "sss_burley_d": (c.c_int32, [c.c_void_p, c.POINTER(c.c_double)]),
         "sss_material_support": (c.c_int32, [c.c_void_p,
                                              c.POINTER(c.c_double)]),
@@ -343,6 +345,10 @@ class Scene:
             callback = ProgressFn(lambda stage, done, _user: progress(
                 stage.decode(), done))
             opt.progress_fn = callback
+        count = ctypes.c_int32()
+        lib.sss_scene_materials(self._ptr, ctypes.byref(count))
+        chosen = (ctypes.c_int32 * max(count.value, 1))()
+        opt.chosen_methods = chosen
         timings = Timings()
         err = ctypes.create_string_buffer(4096)
         code = lib.sss_process_exr(os.fsencode(input_exr),
@@ -350,8 +356,14 @@ class Scene:
                                    ctypes.byref(opt), ctypes.byref(timings),
                                    err, len(err))
         _check(code, err)
+        names = dict(enumerate(name for name, _ in methods()))
         return {"read": timings.read, "scatter": timings.scatter,
-                "write": timings.write}
+                "write": timings.write,
+                "methods": {
+                    (lib.sss_scene_material_name(self._ptr, i) or b"").decode(
+                        errors="replace") or f"material {i}":
+                    names[chosen[i]]
+                    for i in range(count.value) if chosen[i] >= 0}}
 
 
 class Exr:

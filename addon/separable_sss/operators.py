@@ -38,6 +38,8 @@ def _done_text(job, image):
     path = job.output_exr or (image.filepath if image else "")
     parts = [job.summary] if job.summary else []
     parts.append(pipeline.timings_text(job))
+    if pipeline.methods_text(job):
+        parts.append(pipeline.methods_text(job))
     return "SSS done (%s): %s" % ("; ".join(parts), path)
 
 

@@ -187,6 +187,13 @@ def timings_text(job):
             f" write {t.get('write', 0):.2f} s")
 
 
+def methods_text(job):
+    """The method each material ran ("Skin: disk, Wax: separable"): what
+    the Auto method chose, frame by frame."""
+    methods = job.timings.get("methods") or {}
+    return ", ".join(f"{name}: {m}" for name, m in sorted(methods.items()))
+
+
 def support_metres(scene, found):
     """How far the material's profile reaches, as the library uses it."""
     return native.material_support(library_material(scene, found)) * \

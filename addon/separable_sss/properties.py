@@ -188,7 +188,8 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
         name="Scene Radius Scale", min=0.0, soft_max=10.0, default=1.0,
         description="Multiplies every material's scattering distances "
         "(0: no scattering)")
-    # Stored as the method's value in the library (0 = separable).
+    # Stored as the method's value in the library (0 = auto, the first
+    # item and so the default).
     method: EnumProperty(name="Method", items=method_items)
     taps: IntProperty(
         name="Taps", min=1, max=4097, default=33,

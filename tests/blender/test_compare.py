@@ -59,7 +59,7 @@ def test_compare_quick(tmp_path):
         base = next(r for r in cycles if r["samples"] == n and
                     r["method"] == "no-sss")
         ours = next(r for r in cycles if r["samples"] == n and
-                    r["method"] == "separable")
+                    r["method"] == "auto")
         assert float(ours["rmse"]) < float(base["rmse"]), (n, ours, base)
         assert float(ours["post_s"]) > 0
         assert 0 < float(ours["ssim"]) <= 1
@@ -88,7 +88,7 @@ def test_compare_quick(tmp_path):
                 if r["method"].endswith("+oidn")}
     if "OIDN rows skipped" not in md:
         assert set(denoised) == {(m + "+oidn", n) for n in (16, 64) for m in
-                                 ("random-walk", "no-sss", "separable")}
+                                 ("random-walk", "no-sss", "auto")}
         assert float(denoised["random-walk+oidn", 16]["rmse"]) < \
             float(rw[0]["rmse"])
         assert "with OIDN on both" in md

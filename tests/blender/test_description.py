@@ -32,7 +32,7 @@ def write(scene, found, path):
 
 def test_method_choices_are_the_librarys():
     names = [name for name, _ in native.methods()]
-    assert len(names) >= 4 and "separable" == names[0]
+    assert len(names) >= 5 and "auto" == names[0]
     items = properties.method_items()
     assert [i[0] for i in items] == [n.upper().replace("-", "_")
                                      for n in names]
@@ -51,7 +51,7 @@ def test_every_method_choice_reaches_the_library(scene, tmp_path):
         assert json.load(open(path))["method"] == name
         with native.Scene(path) as sc:
             assert sc.warnings == []
-    scene.sss.method = "SEPARABLE"
+    scene.sss.method = "AUTO"
 
 
 def test_description_is_read_without_warnings(scene, tmp_path):
