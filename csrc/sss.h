@@ -402,10 +402,11 @@ SSS_API sss_result sss_calibration_gain(int32_t calibration,
 /* --------------------------------------------------------------- options */
 
 enum sss_method {
-	SSS_METHOD_AUTO = 0,      /* per material: separable, or disk where the
-	                             kernel is wide against the surface's
-	                             curvature (see sss_process_options'
-	                             chosen_methods) */
+	SSS_METHOD_AUTO = 0,      /* per material: separable, or where the
+	                             radius reaches the surface's curvature
+	                             radius disk, with the light that enters
+	                             a pixel leaving it in all (see
+	                             sss_process_options' chosen_methods) */
 	SSS_METHOD_SEPARABLE = 1, /* two 1-D passes, all lobes at once */
 	SSS_METHOD_SEPARABLE_EXACT = 2, /* two 1-D passes per Gaussian lobe:
 	                                   exact for sums of Gaussians; Burley

@@ -393,7 +393,18 @@ static sss_result run_auto(sss__job *job, rows_ctx *rc,
 		memcpy(job->signal, job->scratch, 3 * npix * sizeof *job->signal);
 		job->signal_px = rc->signal_px = 3;
 		job->signal_ch = rc->signal_ch = 1;
-		r = sss__disk(job, opt->samples, opt->num_threads);
+		/* Per source where the light enters only from the front: with
+		 * back-lit transmission it overshot (marble at x100: 0.66 ->
+		 * 0.71 of the error without SSS), as the shape term does. */
+		uint8_t *per_source = malloc(material_count ? material_count : 1);
+		if (!per_source) {
+			r = SSS_ERR_OUT_OF_MEMORY;
+			break;
+		}
+		for (int32_t m = 0; m < material_count; m++)
+			per_source[m] = !sss__transmission_active(rc->transmission, m);
+		r = sss__disk(job, opt->samples, opt->num_threads, per_source);
+		free(per_source);
 	}
 	job->slot = slot;
 	free(own);
@@ -595,7 +606,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		else if (opt.method == SSS_METHOD_SEPARABLE_EXACT)
 			r = sss__separable_exact(&job, materials, material_count, &opt);
 		else if (opt.method == SSS_METHOD_DISK)
-			r = sss__disk(&job, opt.samples, opt.num_threads);
+			r = sss__disk(&job, opt.samples, opt.num_threads, NULL);
 		else
 			r = sss__separable(&job, opt.num_threads);
 		if (r == SSS_ERR_OUT_OF_MEMORY)

@@ -9,7 +9,9 @@
  * distance of every sample. auto reads, per material, the median over a
  * grid of its pixels of x = the widest walk radius x the mean curvature
  * there (sss__mean_curvature: flat and concave read 0), and runs the disk
- * method where x reaches AUTO_DISK_X, the separable method elsewhere.
+ * method where x reaches AUTO_DISK_X, the separable method elsewhere
+ * (sss_apply.c runs them, the disk method normalised per source where
+ * no back-lit transmission carries that light already).
  */
 #include "sss_internal.h"
 

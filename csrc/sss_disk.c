@@ -39,6 +39,12 @@ typedef struct disk_ctx {
 	const int8_t *sampler;   /* per kernel: the channel radii follow, -1 */
 	const double *base;      /* per sample i: cos, sin of 2 pi frac(i/g) */
 	int32_t samples;
+	/* Per-source normalisation (NULL: none): each pixel's share of its
+	 * profile's mass that lands on pixels of its material, per channel,
+	 * which the first pass measures instead of the blur. */
+	float *available;
+	const uint8_t *per_source; /* per kernel, or NULL */
+	int measuring, undoing;
 } disk_ctx;
 
 /* A fixed hash of the pixel's coordinates in [0, 1). */
@@ -238,6 +244,16 @@ static void disk_pixel(const disk_ctx *ctx, int16_t slot, int32_t x,
 			wsum[c] += wc;
 		}
 	}
+	if (ctx->measuring) {
+		if (!ctx->per_source[slot])
+			return; /* keeps 1 */
+		/* The samples cover `mass` of the profile; each weight is the
+		 * profile over the sampling pdf, 1 on average where all land. */
+		float *a = ctx->available + 3 * ((int64_t)y * w + x);
+		for (int c = 0; c < 3; c++)
+			a[c] = (float)(mass * wsum[c] / n);
+		return;
+	}
 	for (int c = 0; c < 3; c++)
 		if (wsum[c] > 0.0)
 			out[c] = (float)(acc[c] / wsum[c]);
@@ -270,8 +286,39 @@ static void blend_rows(void *vctx, int32_t y0, int32_t y1)
 			                 job->scratch + 3 * i, job->signal + 3 * i);
 }
 
+/* Per-source normalisation: light is conserved per pixel where it
+ * enters, not where it leaves. With W(q) the share of q's profile that
+ * lands on its material, the light leaving p is
+ * sum_q K(p, q) L(q) / W(q) = W(p) N(L / W)(p), N the normalised blur
+ * the samples estimate; on a surface the kernel sees whole, W = 1 and it
+ * is that blur. Light entering near a rim or an edge then leaves near
+ * there rather than spreading inwards (measured in docs/comparison.md).
+ * A source under AVAILABLE_FLOOR of its profile on screen is taken as
+ * having that much: the rest leaves where the camera cannot see. */
+#define AVAILABLE_FLOOR 0.05f
+
+/* L / W before the blur; after it, W N(L / W) and L back. */
+static void per_source_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const disk_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	for (int64_t i = (int64_t)y0 * job->width; i < (int64_t)y1 * job->width;
+	     i++)
+		if (job->slot[i] >= 0)
+			for (int c = 0; c < 3; c++) {
+				float *a = ctx->available + 3 * i + c;
+				if (ctx->undoing) {
+					job->signal[3 * i + c] *= *a;
+					job->scratch[3 * i + c] *= *a;
+				} else {
+					*a = *a > AVAILABLE_FLOOR ? *a : AVAILABLE_FLOOR;
+					job->signal[3 * i + c] /= *a;
+				}
+			}
+}
+
 sss_result sss__disk(const sss__job *job, int32_t samples,
-                     int32_t num_threads)
+                     int32_t num_threads, const uint8_t *per_source)
 {
 	size_t npix = (size_t)job->width * (size_t)job->height;
 	int32_t kernels = 0;
@@ -280,9 +327,14 @@ sss_result sss__disk(const sss__job *job, int32_t samples,
 			kernels = job->slot[i] + 1;
 	int8_t *sampler = malloc(kernels ? (size_t)kernels : 1);
 	double *base = malloc(2 * (size_t)samples * sizeof *base);
-	if (!sampler || !base) {
+	int any = 0;
+	for (int32_t m = 0; per_source && m < kernels; m++)
+		any |= per_source[m];
+	float *available = any ? malloc(3 * npix * sizeof *available) : NULL;
+	if (!sampler || !base || (any && !available)) {
 		free(sampler);
 		free(base);
+		free(available);
 		return SSS_ERR_OUT_OF_MEMORY;
 	}
 	for (int32_t m = 0; m < kernels; m++)
@@ -294,10 +346,25 @@ sss_result sss__disk(const sss__job *job, int32_t samples,
 		base[2 * i] = cos(a);
 		base[2 * i + 1] = sin(a);
 	}
-	disk_ctx ctx = {job, sampler, base, samples};
+	disk_ctx ctx = {job, sampler, base, samples, available, per_source, 0,
+	                0};
+	if (available) {
+		/* Pixels with nothing but the centre within reach keep 1. */
+		for (size_t i = 0; i < 3 * npix; i++)
+			available[i] = 1.0f;
+		ctx.measuring = 1;
+		sss__parallel_rows(job->height, num_threads, disk_rows, &ctx);
+		ctx.measuring = 0;
+		sss__parallel_rows(job->height, num_threads, per_source_rows, &ctx);
+	}
 	sss__parallel_rows(job->height, num_threads, disk_rows, &ctx);
+	if (available) {
+		ctx.undoing = 1;
+		sss__parallel_rows(job->height, num_threads, per_source_rows, &ctx);
+	}
 	sss__parallel_rows(job->height, num_threads, blend_rows, &ctx);
 	free(sampler);
 	free(base);
+	free(available);
 	return SSS_OK;
 }

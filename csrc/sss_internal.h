@@ -206,9 +206,11 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
                              const sss_image *out_diffuse_light,
                              int32_t *chosen, char *errbuf,
                              size_t errbuf_len);
-/* The stochastic disk method (sss_disk.c), at most `samples` per pixel. */
+/* The stochastic disk method (sss_disk.c), at most `samples` per pixel;
+ * per_source (per kernel, NULL = none): light conserved where it enters
+ * rather than where it leaves (what the auto method runs; sss_disk.c). */
 sss_result sss__disk(const sss__job *job, int32_t samples,
-                     int32_t num_threads);
+                     int32_t num_threads, const uint8_t *per_source);
 
 /* Channel c of a material as a sum of 2-D Gaussians in scene units, len
  * scene units per metre of profile length (a kernel's len): fills
