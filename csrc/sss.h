@@ -438,6 +438,10 @@ typedef struct sss_options {
 	int32_t samples;         /* SSS_METHOD_DISK: most samples per pixel,
 	                            1..4096 (64); a pixel takes
 	                            pi R^2 / 4 for a kernel R pixels wide */
+	int32_t crease;          /* 1 (default): a calibrated material also
+	                            carries light over sharp convex edges
+	                            onto the next face, as the walk does;
+	                            0: not (what its measurement compares) */
 } sss_options;
 
 SSS_API void sss_options_default(sss_options *opt);

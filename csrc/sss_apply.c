@@ -109,6 +109,9 @@ static sss_result check_options(const sss_options *o, char *errbuf,
 	if (o->samples < 1 || o->samples > 4096)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: samples %d must be "
 		             "1..4096", o->samples);
+	if (o->crease != 0 && o->crease != 1)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: crease %d must be "
+		             "0 or 1", o->crease);
 	return SSS_OK;
 }
 
@@ -156,6 +159,8 @@ typedef struct rows_ctx {
 	                       of each CURVATURE_BLOCK^2 block, NaN where not
 	                       read (or NULL: no material follows the shape) */
 	int16_t *slot;
+	const float *crease; /* what sharp edges carried (sss_crease.c), 3 a
+	                        pixel in the signal's units, or NULL */
 	const sss_image *out_combined, *out_diffuse_light;
 } rows_ctx;
 
@@ -258,6 +263,30 @@ static void curvature_rows(void *vctx, int32_t by0, int32_t by1)
 		}
 }
 
+/* What sharp edges carried to pixel i, measured over the flat face's
+ * light: the flat gain, not the shape's (whose rise at the edge the
+ * measurement held). */
+static void add_crease(const rows_ctx *ctx, size_t i, float mu,
+                       const float *col, float *light)
+{
+	const float *e = ctx->crease + 3 * i;
+	if (!(e[0] != 0.0f || e[1] != 0.0f || e[2] != 0.0f))
+		return;
+	int16_t k = ctx->slot[i];
+	float extra[3];
+	for (int c = 0; c < 3; c++) {
+		extra[c] = e[c];
+		if (ctx->kernels[k].texturing == SSS_TEXTURING_PRE_AND_POST) {
+			float root = sqrtf(fmaxf(col[c], 0.0f));
+			extra[c] = root > 0.0f ? extra[c] / root : 0.0f;
+		}
+	}
+	sss__calibration_apply(&ctx->materials[k], ctx->kernels[k].calibration_fade,
+	                       mu, NULL, col, extra);
+	for (int c = 0; c < 3; c++)
+		light[c] += extra[c];
+}
+
 /* Back to light (contribution = light x DiffCol) and recombine. */
 static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 {
@@ -320,6 +349,8 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				}
 				sss__calibration_apply(m, fade, mu, shaped ? shape : NULL,
 				                       col, light);
+				if (ctx->crease)
+					add_crease(ctx, i, mu, col, light);
 			}
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
@@ -346,6 +377,43 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 			}
 		}
 	}
+}
+
+/* The crease term (sss_crease.c) for the materials whose calibration
+ * has one and follows the shape (not with back-lit transmission, which
+ * stands for what crosses a finite object), from the light before the
+ * blur: *out is NULL when no material takes it. */
+static sss_result crease_before(const rows_ctx *rc, const sss__job *job,
+                                int32_t material_count,
+                                const sss_options *opt, float **out)
+{
+	*out = NULL;
+	uint8_t *enabled = calloc(material_count, 1);
+	int32_t *calibration = malloc(material_count * sizeof *calibration);
+	sss_result r = enabled && calibration ? SSS_OK : SSS_ERR_OUT_OF_MEMORY;
+	int any = 0;
+	for (int32_t m = 0; !r && m < material_count; m++) {
+		float kappa, gamma;
+		calibration[m] = rc->materials[m].calibration;
+		sss__crease_params(calibration[m], 0.5f, &kappa, &gamma);
+		enabled[m] = rc->kernels[m].support > 0.0 && kappa > 0.0f &&
+		             shape_follows(rc, (int16_t)m);
+		any |= enabled[m];
+	}
+	size_t npix = (size_t)job->width * job->height;
+	if (!r && any) {
+		if (!(*out = malloc(npix * 3 * sizeof **out)))
+			r = SSS_ERR_OUT_OF_MEMORY;
+		else if ((r = sss__crease(job, material_count, &rc->p->diff_col,
+		                          enabled, calibration, opt->num_threads,
+		                          *out))) {
+			free(*out);
+			*out = NULL;
+		}
+	}
+	free(enabled);
+	free(calibration);
+	return r;
 }
 
 /* The auto method: the choice per material (sss_auto.c), then each
@@ -507,6 +575,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	float *scratch = packed_output(out_combined, out_diffuse_light);
 	float *own_scratch = NULL;
 	float *curvature = NULL; /* allocated below, once kernels tell */
+	float *crease = NULL;    /* likewise */
 	if (!scratch)
 		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
@@ -594,6 +663,11 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		}
 	rc.curvature = curvature;
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
+	if (opt.crease && material_count > 0 &&
+	    (r = crease_before(&rc, &job, material_count, &opt, &crease))) {
+		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
+		goto done;
+	}
 
 	if (material_count > 0) {
 		for (int32_t m = 0; m < material_count; m++)
@@ -616,6 +690,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 			goto done;
 	}
 
+	rc.crease = crease;
 	if (curvature)
 		sss__parallel_rows((h + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK,
 		                   opt.num_threads, curvature_rows, &rc);
@@ -632,6 +707,7 @@ done:
 	free(slot);
 	free(signal);
 	free(curvature);
+	free(crease);
 	free(own_scratch);
 	free(zrange);
 	free(method_of);

@@ -89,6 +89,9 @@ float sss__table_lookup(const float *table, double x, double inv_support);
 void sss__line_mass3(const sss__kernel *k, double a, double b,
                      double out[3]);
 
+/* Mass of Burley's 1-D marginal (shape d) over [a, b], 0 <= a < b. */
+double sss__burley_line_mass(double a, double b, double d);
+
 /* Calibration against Cycles' random walk (sss_calibration.c): Burley d
  * over the radius for an albedo (SSS_BURLEY_CYCLES_RANDOM_WALK, and
  * SSS_BURLEY_CYCLES4_RANDOM_WALK), and the per-pixel energy gain
@@ -117,6 +120,21 @@ int sss__calibration_needs_shape(const sss_material *mat,
  * and x = mean curvature x radius (the calibration's shape table; 1 for
  * x <= 0 and for calibrations without one). */
 float sss__shape_gain(int32_t calibration, float albedo, float x);
+/* The crease term (sss_calibration.c, sss_crease.c): what the walk
+ * carries over a sharp convex edge onto the other face, at distance t
+ * from the edge, over the scattered light entering near it, is
+ * kappa F(t), F the tail beyond t of Burley's 1-D marginal with
+ * d = gamma x the walk's radius; kappa 0 for calibrations without it. */
+void sss__crease_params(int32_t calibration, float albedo, float *kappa,
+                        float *gamma);
+/* Adds nothing where no pixel of an enabled kernel (per kernel: enabled,
+ * and its material's calibration) has a crease: fills extra (3 floats a
+ * pixel, packed, the signal's units) with the light that crosses one,
+ * from job->signal before the blur. */
+sss_result sss__crease(const sss__job *job, int32_t kernel_count,
+                       const sss_image *diff_col, const uint8_t *enabled,
+                       const int32_t *calibration, int32_t num_threads,
+                       float *extra);
 /* shape_x: per channel, the surface's mean curvature x the radius the
  * walk sees (NULL: flat, or not followed). */
 void sss__calibration_apply(const sss_material *mat, const float fade[3],

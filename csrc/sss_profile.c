@@ -148,6 +148,14 @@ static double burley_line_integral(const channel *ch, double a, double b)
 	return s * half;
 }
 
+double sss__burley_line_mass(double a, double b, double d)
+{
+	if (!(b > a) || !(d > 0.0))
+		return 0.0;
+	channel ch = {.burley = 1, .d = d};
+	return burley_line_integral(&ch, fmax(a, 0.0), b);
+}
+
 static double channel_line_cdf_gauss(const channel *ch, double x)
 {
 	double s = 0.0;

@@ -728,6 +728,7 @@ static const field top_fields[] = {
 	 .hi = INT32_MAX},
 	{.key = "materials", .type = FIELD_SPECIAL},
 	{TOP("samples", FIELD_INT, options.samples), .lo = 1, .hi = 4096},
+	{TOP("crease", FIELD_INT, options.crease), .lo = 0, .hi = 1},
 };
 enum { T_VERSION, T_CAMERA, T_MATERIALS = 9, T_COUNT = COUNT(top_fields) };
 

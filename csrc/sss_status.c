@@ -82,6 +82,7 @@ void sss_options_default(sss_options *opt)
 	opt->background_depth = 1e9;
 	opt->max_support_px = 256;
 	opt->samples = 64;
+	opt->crease = 1;
 }
 
 void sss_camera_default(sss_camera *cam)

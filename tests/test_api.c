@@ -163,6 +163,8 @@ static void test_apply_arguments(void)
 	          opt.taps = 33, "taps");
 	BAD_APPLY("apply-12", SSS_ERR_INVALID_ARGUMENT, opt.samples = 0,
 	          opt.samples = 64, "samples");
+	BAD_APPLY("apply-12b", SSS_ERR_INVALID_ARGUMENT, opt.crease = 2,
+	          opt.crease = 1, "crease");
 	BAD_APPLY("apply-13", SSS_ERR_INVALID_ARGUMENT, opt.method = 17,
 	          opt.method = 0, "method");
 	BAD_APPLY("apply-14", SSS_ERR_INVALID_ARGUMENT, cam.lens_mm = 0,

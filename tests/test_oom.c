@@ -8,6 +8,7 @@
 #include "test_util.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -212,6 +213,32 @@ int main(void)
 	a.opt.method = SSS_METHOD_REFERENCE;
 	oom_loop("oom-apply-reference", run_apply, &a, NULL);
 	oom_loop("oom-kernel-1d", run_kernel, &a, NULL);
+
+	/* A convex edge along the middle rows (45-degree faces for the
+	 * default camera at 2 m) and a calibrated Burley: the crease term's
+	 * allocations too. */
+	for (int y = 0; y < 16; y++)
+		for (int x = 0; x < 24; x++) {
+			a.s->depth[y * 24 + x] = 2.0f + 0.06f * fabsf(y - 7.5f);
+			a.s->index[y * 24 + x] = 1.0f;
+			for (int c = 0; c < 3; c++) /* the walk at 1: no crease */
+				a.s->diff_col[3 * (y * 24 + x) + c] = 0.6f;
+		}
+	a.mats[0].calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+	a.mats[0].burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	a.opt.method = SSS_METHOD_SEPARABLE;
+	float *plain = calloc(24 * 16 * 4, sizeof(float));
+	a.opt.crease = 0;
+	CHECK_STATUS("oom-crease-setup", SSS_OK, run_apply(&a));
+	memcpy(plain, a.out, 24 * 16 * 4 * sizeof(float));
+	a.opt.crease = 1;
+	CHECK_STATUS("oom-crease-setup", SSS_OK, run_apply(&a));
+	CHECK("oom-crease-active", memcmp(plain, a.out,
+	                                  24 * 16 * 4 * sizeof(float)) != 0,
+	      "the edge carried no light: the loop below would not reach the "
+	      "crease term");
+	free(plain);
+	oom_loop("oom-apply-crease", run_apply, &a, NULL);
 	free(a.out);
 	synth_free(a.s);
 

@@ -35,7 +35,8 @@ static int options_equal(const sss_options *a, const sss_options *b)
 	       a->radius_scale == b->radius_scale && a->taps == b->taps &&
 	       a->num_threads == b->num_threads &&
 	       a->background_depth == b->background_depth &&
-	       a->max_support_px == b->max_support_px;
+	       a->max_support_px == b->max_support_px &&
+	       a->samples == b->samples && a->crease == b->crease;
 }
 
 /* sss_material has only 4-byte members (no padding), and both sides start
@@ -63,6 +64,7 @@ static const char *full_scene =
 	"  \"method\": \"reference\",\n"
 	"  \"radius_scale\": 1.5, \"taps\": 65, \"threads\": 4,\n"
 	"  \"background_depth\": 5e9, \"max_support_px\": 128,\n"
+	"  \"crease\": 0,\n"
 	"  \"materials\": [\n"
 	"    {\"pass_index\": 7, \"name\": \"Skin\", \"profile\": \"burley\","
 	" \"strength\": 0.75, \"texturing\": \"pre-and-post\", \"taps\": 21,"
@@ -116,6 +118,7 @@ static void test_full_scene(void)
 	opt.num_threads = 4;
 	opt.background_depth = 5e9;
 	opt.max_support_px = 128;
+	opt.crease = 0;
 	CHECK("full-options", options_equal(sss_scene_options(sc), &opt),
 	      "options differ");
 
@@ -382,6 +385,8 @@ static const struct {
 	{"err-max-support", "{\"max_support_px\": 0}",
 	 SSS_ERR_INVALID_ARGUMENT, "max_support_px: 0 is out of range (must be "
 	 ">= 1)"},
+	{"err-crease", "{\"crease\": 2}",
+	 SSS_ERR_INVALID_ARGUMENT, "crease: 2 is out of range (must be 0..1)"},
 	{"err-radius-scale", "{\"radius_scale\": -1}",
 	 SSS_ERR_INVALID_ARGUMENT, "radius_scale: -1 is out of range"},
 	{"err-mat-taps", "{\"materials\": [{\"pass_index\": 1, \"profile\": "

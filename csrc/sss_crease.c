@@ -1,0 +1,697 @@
+/* sss_crease.c - the light a sharp convex edge carries from one face to
+ * the next.
+ *
+ * Where two faces meet at a convex edge, the random walk sends the light
+ * that enters one face within a few mean free paths of the edge out
+ * through the other face: a flux through the other face's plane, which no
+ * exit profile of a flat half-space has and which a depth-aware blur,
+ * whatever its distances, does not give (comparison.md: on a 90-degree
+ * edge the walk's first unlit pixel was 2.5 times what a sum over the true
+ * surface gives). Measured on such an edge (calibrate.py --part crease),
+ * what the walk adds on the unlit face at distance t from the edge, over
+ * the lit face's scattered light, is kappa F(t), F the tail beyond t of
+ * Burley's 1-D marginal with d = gamma r (r the walk's radius), kappa and
+ * gamma by albedo (sss__crease_params).
+ *
+ * In screen space, from the Depth pass: every pixel's view-space point
+ * and normal (the slope on the side where its face goes on straightest);
+ * the pixels next to a crease (a neighbour of the material whose normal
+ * is more than 45 degrees away, each below the other's tangent plane,
+ * each face flat a pixel further: a crease, not a smooth bend such as a
+ * sphere's limb), listed by tile with the light two pixels inside their
+ * face and how far that face goes on. Each pixel within reach of such
+ * sources on another face, whose edge is the receiver's own (the source
+ * lies on the line where the two tangent planes meet), takes their light
+ * weighted by Burley's profile over the distance along the surface
+ * through the edge, and its own distance t to the edge; it gains kappa x
+ * that light x the mean of F(t) - F(t + w) over its extent across the
+ * edge, w the lit face's width (a face narrower than the radius sends at
+ * most what entered it). For a lit face the sum is the measured profile
+ * whatever the pixel size.
+ */
+#include "sss_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define CREASE_MIN_COS 0.7071068 /* 45 degrees between the two normals */
+#define CREASE_REACH 10.0        /* in d: F(10 d) < 2 % of F(0) */
+#define CREASE_TABLE 256
+#define CREASE_SOURCES 16       /* most sources read per receiver, about */
+#define CREASE_U_MAX 60.0        /* F(60) for d = 1: about 1e-10 */
+
+/* A pixel next to a crease, on its own face: where the light that crosses
+ * the edge comes from. */
+typedef struct crease_source {
+	int32_t x, y;
+	double pos[3], nrm[3];
+	double pix;      /* its size (scene units) */
+	double s_limit;  /* how far from the edge its pixel reaches */
+	double extent;   /* how far its face goes on away from the edge */
+	float light[3];  /* the signal a little inside its face */
+} crease_source;
+
+typedef struct crease_ctx {
+	const sss__job *job;
+	const sss_image *diff_col;
+	const uint8_t *enabled;       /* per kernel */
+	const int32_t *calibration;   /* per kernel */
+	const double *reach;          /* per kernel: the widest reach over
+	                                 albedos and channels, scene units */
+	const float *pos, *nrm;       /* 3 per pixel; nrm NaN: unknown */
+	uint8_t *near;                /* per pixel: BENT, NEAR_BENT */
+	int8_t *across;               /* per pixel: the neighbour (0..7) over a
+	                                 crease, or -1 */
+	int32_t tiles_x, tiles_y;
+	const int32_t *tile_first;    /* tiles_x * tiles_y + 1 offsets */
+	const crease_source *sources; /* by tile */
+	float *extra;                 /* 3 per pixel, packed */
+	double u_node[CREASE_TABLE];  /* Burley d = 1 */
+	double G[CREASE_TABLE];       /* integral of F over [0, u] */
+} crease_ctx;
+
+#define CREASE_TILE 8
+static const int8_t step_x[8] = {1, 1, 0, -1, -1, -1, 0, 1};
+static const int8_t step_y[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+
+static void view_point(const sss__projection *p, int32_t x, int32_t y,
+                       double z, double out[3])
+{
+	double scale = p->ortho ? 1.0 : z;
+	out[0] = (x + 0.5 - p->cx) / p->fx * scale;
+	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
+	out[2] = z;
+}
+
+/* The unit vector from the point towards the camera. */
+static void to_camera(const sss__projection *p, const float *pt,
+                      double v[3])
+{
+	if (p->ortho) {
+		v[0] = v[1] = 0.0, v[2] = -1.0;
+		return;
+	}
+	double n = sqrt((double)pt[0] * pt[0] + (double)pt[1] * pt[1] +
+	                (double)pt[2] * pt[2]);
+	for (int c = 0; c < 3; c++)
+		v[c] = n > 0.0 ? -pt[c] / n : (c == 2 ? -1.0 : 0.0);
+}
+
+static double dot3(const double *a, const double *b)
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double *a, const double *b, double *out)
+{
+	out[0] = a[1] * b[2] - a[2] * b[1];
+	out[1] = a[2] * b[0] - a[0] * b[2];
+	out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Tabulates G(u) = integral over [0, u] of F, F(u) = the mass of Burley's
+ * (d = 1) 1-D marginal beyond u, at u = U_MAX (k / (N-1))^2. */
+static void tabulate(crease_ctx *ctx)
+{
+	double F[CREASE_TABLE];
+	for (int k = 0; k < CREASE_TABLE; k++) {
+		double s = (double)k / (CREASE_TABLE - 1);
+		ctx->u_node[k] = CREASE_U_MAX * s * s;
+	}
+	F[CREASE_TABLE - 1] = 0.0;
+	for (int k = CREASE_TABLE - 2; k >= 0; k--)
+		F[k] = F[k + 1] + sss__burley_line_mass(ctx->u_node[k],
+		                                        ctx->u_node[k + 1], 1.0);
+	/* F(0) is 1/2 exactly; what the quadrature missed is spread evenly */
+	double fix = 0.5 / F[0];
+	ctx->G[0] = 0.0;
+	for (int k = 1; k < CREASE_TABLE; k++)
+		ctx->G[k] = ctx->G[k - 1] + 0.5 * fix * (F[k] + F[k - 1]) *
+		            (ctx->u_node[k] - ctx->u_node[k - 1]);
+}
+
+static double G_at(const crease_ctx *ctx, double u)
+{
+	if (!(u > 0.0))
+		return 0.0;
+	double s = sqrt(u / CREASE_U_MAX) * (CREASE_TABLE - 1);
+	if (s >= CREASE_TABLE - 1)
+		return ctx->G[CREASE_TABLE - 1];
+	int k = (int)s;
+	double t = (u - ctx->u_node[k]) / (ctx->u_node[k + 1] - ctx->u_node[k]);
+	return ctx->G[k] + t * (ctx->G[k + 1] - ctx->G[k]);
+}
+
+/* Step from pixel (x, y) to its neighbour along one axis, on the side
+ * where the surface goes on straightest (the smaller second difference
+ * with the next pixel), so that a pixel next to an edge takes its own
+ * face's slope; 0 when no neighbour of its slot is there. */
+static int face_step(const crease_ctx *ctx, int32_t x, int32_t y, int dx,
+                     int dy, double step[3])
+{
+	const sss__job *job = ctx->job;
+	int32_t w = job->width, h = job->height;
+	int16_t own = job->slot[(size_t)y * w + x];
+	const float *here = ctx->pos + 3 * ((size_t)y * w + x);
+	double best = INFINITY;
+	int found = 0;
+	for (int side = -1; side <= 1; side += 2) {
+		int32_t x1 = x + side * dx, y1 = y + side * dy;
+		if (x1 < 0 || y1 < 0 || x1 >= w || y1 >= h ||
+		    job->slot[(size_t)y1 * w + x1] != own)
+			continue;
+		const float *p1 = ctx->pos + 3 * ((size_t)y1 * w + x1);
+		int32_t x2 = x1 + side * dx, y2 = y1 + side * dy;
+		double bend;
+		if (x2 >= 0 && y2 >= 0 && x2 < w && y2 < h &&
+		    job->slot[(size_t)y2 * w + x2] == own) {
+			const float *p2 = ctx->pos + 3 * ((size_t)y2 * w + x2);
+			bend = 0.0;
+			for (int c = 0; c < 3; c++) {
+				double b = (double)p2[c] - 2.0 * p1[c] + here[c];
+				bend += b * b;
+			}
+		} else {
+			bend = 1e30 + fabs((double)p1[2] - here[2]);
+		}
+		if (!(bend < best))
+			continue;
+		best = bend;
+		for (int c = 0; c < 3; c++)
+			step[c] = side * ((double)p1[c] - here[c]);
+		found = 1;
+	}
+	return found;
+}
+
+/* The unit normal at pixel (x, y), towards the camera; 0 where its
+ * neighbours do not tell. */
+static int pixel_normal(const crease_ctx *ctx, int32_t x, int32_t y,
+                        double n[3])
+{
+	double sx[3], sy[3], c[3], v[3];
+	size_t i = (size_t)y * ctx->job->width + x;
+	if (!face_step(ctx, x, y, 1, 0, sx) || !face_step(ctx, x, y, 0, 1, sy))
+		return 0;
+	cross3(sx, sy, c);
+	double len = sqrt(dot3(c, c));
+	if (!(len > 0.0) || !isfinite(len))
+		return 0;
+	to_camera(&ctx->job->proj, ctx->pos + 3 * i, v);
+	double sign = dot3(c, v) < 0.0 ? -1.0 : 1.0;
+	for (int k = 0; k < 3; k++)
+		n[k] = sign * c[k] / len;
+	return 1;
+}
+
+/* Pixel size (scene units) at depth z. */
+static double pixel_size(const sss__projection *p, double z)
+{
+	return 1.0 / sqrt(sss__pixels_per_unit_x(p, z) *
+	                  sss__pixels_per_unit_y(p, z));
+}
+
+/* A crease bends the depth: where the second difference along a row or a
+ * column passes BEND_SLOPE times the pixel's size (two faces at 45
+ * degrees to the view give 2, normals 45 degrees apart at least 0.8; a
+ * sphere of radius R pixels seen head-on 1/R, more only near its limb),
+ * the pixel is BENT; pixels within 2 of one are NEAR_BENT and get
+ * normals (detection reads a pixel beyond each side). */
+#define BEND_SLOPE 0.4
+#define BENT 2u
+#define NEAR_BENT 1u
+
+static int bent_along(const crease_ctx *ctx, int32_t x, int32_t y, int dx,
+                      int dy, double pix)
+{
+	const sss__job *job = ctx->job;
+	int32_t w = job->width, h = job->height;
+	int32_t xa = x - dx, ya = y - dy, xb = x + dx, yb = y + dy;
+	if (xa < 0 || ya < 0 || xb >= w || yb >= h)
+		return 0;
+	int16_t k = job->slot[(size_t)y * w + x];
+	size_t a = (size_t)ya * w + xa, b = (size_t)yb * w + xb;
+	if (job->slot[a] != k || job->slot[b] != k)
+		return 0;
+	double z = ctx->pos[3 * ((size_t)y * w + x) + 2];
+	return fabs((double)ctx->pos[3 * a + 2] - 2.0 * z + ctx->pos[3 * b + 2]) >
+	       BEND_SLOPE * pix;
+}
+
+static void bend_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	crease_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	int32_t w = job->width;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			ctx->near[i] = 0;
+			if (job->slot[i] < 0 || !ctx->enabled[job->slot[i]])
+				continue;
+			double pix = pixel_size(&job->proj, ctx->pos[3 * i + 2]);
+			if (bent_along(ctx, x, y, 1, 0, pix) ||
+			    bent_along(ctx, x, y, 0, 1, pix))
+				ctx->near[i] = BENT;
+		}
+}
+
+/* NEAR_BENT around every BENT pixel (serial: a pixel's neighbours). */
+static void mark_near(crease_ctx *ctx)
+{
+	int32_t w = ctx->job->width, h = ctx->job->height;
+	for (int32_t y = 0; y < h; y++)
+		for (int32_t x = 0; x < w; x++) {
+			if (!(ctx->near[(size_t)y * w + x] & BENT))
+				continue;
+			for (int32_t v = y - 2; v <= y + 2; v++)
+				for (int32_t u = x - 2; u <= x + 2; u++)
+					if (u >= 0 && v >= 0 && u < w && v < h)
+						ctx->near[(size_t)v * w + u] |= NEAR_BENT;
+		}
+}
+
+static void normal_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	crease_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	int32_t w = job->width;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			if (!(ctx->near[i] & NEAR_BENT))
+				continue; /* never read */
+			float *n = (float *)ctx->nrm + 3 * i;
+			double m[3];
+			n[0] = n[1] = n[2] = NAN;
+			if (pixel_normal(ctx, x, y, m))
+				for (int k = 0; k < 3; k++)
+					n[k] = (float)m[k];
+		}
+}
+
+/* |cos| between normal n at pixel i and the ray to it, kept from
+ * grazing. */
+static double facing(const crease_ctx *ctx, size_t i, const double n[3])
+{
+	double v[3];
+	to_camera(&ctx->job->proj, ctx->pos + 3 * i, v);
+	return fmax(fabs(dot3(n, v)), 0.2);
+}
+
+static void load3(const float *v, double out[3])
+{
+	out[0] = v[0], out[1] = v[1], out[2] = v[2];
+}
+
+/* Whether pixel j has a known normal within FLAT_COS of n and the slot k:
+ * the face goes on flat there. */
+#define FLAT_COS 0.95
+static int flat_at(const crease_ctx *ctx, int16_t k, int32_t x, int32_t y,
+                   const double n[3])
+{
+	const sss__job *job = ctx->job;
+	if (x < 0 || y < 0 || x >= job->width || y >= job->height)
+		return 0;
+	size_t j = (size_t)y * job->width + x;
+	if (job->slot[j] != k || !(ctx->near[j] & NEAR_BENT) ||
+	    isnan(ctx->nrm[3 * j]))
+		return 0;
+	double m[3];
+	load3(ctx->nrm + 3 * j, m);
+	return dot3(n, m) > FLAT_COS;
+}
+
+/* Pixels next to a crease: a neighbour of the same slot whose normal is
+ * more than 45 degrees from its own, each below the other's tangent plane
+ * (convex), and each face flat for a pixel beyond them (a crease, not a
+ * smooth bend such as a sphere's limb seen at grazing angles). */
+static void detect_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	crease_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	int32_t w = job->width, h = job->height;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			ctx->across[i] = -1;
+			int16_t k = job->slot[i];
+			if (k < 0 || !(ctx->near[i] & BENT) || isnan(ctx->nrm[3 * i]))
+				continue;
+			double P[3], n[3], best = CREASE_MIN_COS;
+			load3(ctx->pos + 3 * i, P);
+			load3(ctx->nrm + 3 * i, n);
+			for (int dir = 0; dir < 8; dir++) {
+				int32_t qx = x + step_x[dir], qy = y + step_y[dir];
+				if (qx < 0 || qy < 0 || qx >= w || qy >= h)
+					continue;
+				size_t j = (size_t)qy * w + qx;
+				if (job->slot[j] != k || !(ctx->near[j] & NEAR_BENT) ||
+				    isnan(ctx->nrm[3 * j]))
+					continue;
+				double Q[3], m[3], D[3];
+				load3(ctx->pos + 3 * j, Q);
+				load3(ctx->nrm + 3 * j, m);
+				double cs = dot3(n, m);
+				if (!(cs < best))
+					continue;
+				for (int c = 0; c < 3; c++)
+					D[c] = Q[c] - P[c];
+				if (!(dot3(D, n) < 0.0 && dot3(D, m) > 0.0))
+					continue;
+				if (!flat_at(ctx, k, x - step_x[dir], y - step_y[dir], n) ||
+				    !flat_at(ctx, k, qx + step_x[dir], qy + step_y[dir], m))
+					continue;
+				best = cs;
+				ctx->across[i] = (int8_t)dir;
+			}
+		}
+}
+
+/* The signal of pixel j, channel c. */
+static float signal_at(const sss__job *job, size_t j, int c)
+{
+	return job->signal[(int64_t)j * job->signal_px + c * job->signal_ch];
+}
+
+/* How far the face of pixel (x, y) goes on away from the neighbour dir
+ * across its crease, along the screen line through both, while its
+ * points stay on the pixel's tangent plane: light can only cross the edge
+ * from where the face is. */
+#define EXTENT_MAX_PX 1024
+static double face_extent(const crease_ctx *ctx, int32_t x, int32_t y,
+                          int dir, const double P[3], const double n[3])
+{
+	const sss__job *job = ctx->job;
+	int16_t k = job->slot[(size_t)y * job->width + x];
+	double far = 0.0;
+	for (int32_t s = 1; s <= EXTENT_MAX_PX; s++) {
+		int32_t u = x - s * step_x[dir], v = y - s * step_y[dir];
+		if (u < 0 || v < 0 || u >= job->width || v >= job->height)
+			break;
+		size_t j = (size_t)v * job->width + u;
+		if (job->slot[j] != k)
+			break;
+		double Q[3], D[3];
+		load3(ctx->pos + 3 * j, Q);
+		for (int c = 0; c < 3; c++)
+			D[c] = Q[c] - P[c];
+		double along = sqrt(dot3(D, D));
+		if (fabs(dot3(D, n)) > 0.02 * along +
+		                       0.5 * pixel_size(&job->proj, Q[2]))
+			break;
+		far = along;
+	}
+	return far;
+}
+
+/* Lists the crease pixels by tile, each with the light two pixels inside
+ * its face (a pixel filter blends the crease pixel itself with the other
+ * face). */
+static sss_result list_sources(crease_ctx *ctx, int32_t **first_out,
+                               crease_source **sources_out)
+{
+	const sss__job *job = ctx->job;
+	int32_t w = job->width, h = job->height;
+	ctx->tiles_x = (w + CREASE_TILE - 1) / CREASE_TILE;
+	ctx->tiles_y = (h + CREASE_TILE - 1) / CREASE_TILE;
+	size_t tiles = (size_t)ctx->tiles_x * ctx->tiles_y;
+	int32_t *first = calloc(tiles + 1, sizeof *first);
+	if (!first)
+		return SSS_ERR_OUT_OF_MEMORY;
+	size_t count = 0;
+	for (int32_t y = 0; y < h; y++)
+		for (int32_t x = 0; x < w; x++)
+			if (ctx->across[(size_t)y * w + x] >= 0) {
+				first[(size_t)(y / CREASE_TILE) * ctx->tiles_x +
+				      x / CREASE_TILE + 1]++;
+				count++;
+			}
+	for (size_t t = 0; t < tiles; t++)
+		first[t + 1] += first[t];
+	crease_source *src = malloc((count ? count : 1) * sizeof *src);
+	int32_t *fill = malloc((tiles ? tiles : 1) * sizeof *fill);
+	if (!src || !fill) {
+		free(first);
+		free(src);
+		free(fill);
+		return SSS_ERR_OUT_OF_MEMORY;
+	}
+	memcpy(fill, first, tiles * sizeof *fill);
+	for (int32_t y = 0; y < h; y++)
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			int dir = ctx->across[i];
+			if (dir < 0)
+				continue;
+			double n[3];
+			load3(ctx->nrm + 3 * i, n);
+			size_t from = i;
+			for (int back = 2; back >= 1; back--) {
+				int32_t ix = x - back * step_x[dir],
+				        iy = y - back * step_y[dir];
+				if (flat_at(ctx, job->slot[i], ix, iy, n)) {
+					from = (size_t)iy * w + ix;
+					break;
+				}
+			}
+			crease_source *e = &src[fill[(size_t)(y / CREASE_TILE) *
+			                             ctx->tiles_x + x / CREASE_TILE]++];
+			e->x = x, e->y = y;
+			load3(ctx->pos + 3 * i, e->pos);
+			load3(ctx->nrm + 3 * i, e->nrm);
+			e->pix = pixel_size(&job->proj, e->pos[2]);
+			e->s_limit = 1.5 * e->pix / facing(ctx, i, n);
+			e->extent = face_extent(ctx, x, y, dir, e->pos, n) +
+			            0.5 * e->pix / facing(ctx, i, n);
+			for (int c = 0; c < 3; c++)
+				e->light[c] = signal_at(job, from, c);
+		}
+	free(fill);
+	*first_out = first;
+	*sources_out = src;
+	return SSS_OK;
+}
+
+/* A reach in scene units as a window's half-size in pixels. */
+static int32_t reach_px(const crease_ctx *ctx, double reach, double pix)
+{
+	double most = (double)ctx->job->width + ctx->job->height;
+	return (int32_t)ceil(fmax(fmin(reach / pix, most), 2.0));
+}
+
+static void window_tiles(const crease_ctx *ctx, int32_t x, int32_t y,
+                         int32_t r, int32_t *tx0, int32_t *ty0, int32_t *tx1,
+                         int32_t *ty1)
+{
+	*tx0 = (x > r ? x - r : 0) / CREASE_TILE;
+	*ty0 = (y > r ? y - r : 0) / CREASE_TILE;
+	*tx1 = (x + r) / CREASE_TILE;
+	*ty1 = (y + r) / CREASE_TILE;
+	if (*tx1 >= ctx->tiles_x)
+		*tx1 = ctx->tiles_x - 1;
+	if (*ty1 >= ctx->tiles_y)
+		*ty1 = ctx->tiles_y - 1;
+}
+
+/* How many sources the tiles under a window of half-size r hold. */
+static int32_t sources_near(const crease_ctx *ctx, int32_t x, int32_t y,
+                            int32_t r)
+{
+	int32_t tx0, ty0, tx1, ty1, listed = 0;
+	window_tiles(ctx, x, y, r, &tx0, &ty0, &tx1, &ty1);
+	for (int32_t ty = ty0; ty <= ty1; ty++)
+		listed += ctx->tile_first[(size_t)ty * ctx->tiles_x + tx1 + 1] -
+		          ctx->tile_first[(size_t)ty * ctx->tiles_x + tx0];
+	return listed;
+}
+
+static void crease_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const crease_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	const sss__projection *proj = &job->proj;
+	int32_t w = job->width;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			int16_t k = job->slot[i];
+			if (k < 0 || !ctx->enabled[k])
+				continue;
+			const sss__kernel *ker = &job->kernels[k];
+			double P[3], n[3];
+			load3(ctx->pos + 3 * i, P);
+			double pix = pixel_size(proj, P[2]);
+			/* no source within the widest reach: nothing to do */
+			if (!sources_near(ctx, x, y, reach_px(ctx, ctx->reach[k], pix)))
+				continue;
+			if ((ctx->near[i] & NEAR_BENT) && !isnan(ctx->nrm[3 * i]))
+				load3(ctx->nrm + 3 * i, n);
+			else if (!pixel_normal(ctx, x, y, n))
+				continue;
+			const float *col = sss__at(ctx->diff_col, x, y);
+			double kappa[3], d[3], dmax = 0.0;
+			for (int c = 0; c < 3; c++) {
+				float kap, gam;
+				sss__crease_params(ctx->calibration[k], col[c], &kap,
+				                   &gam);
+				kappa[c] = (double)kap * ker->mix[c] *
+				           ker->calibration_fade[c];
+				d[c] = (double)gam * ker->walk_radius[c];
+				if (kappa[c] > 0.0 && d[c] > dmax)
+					dmax = d[c];
+			}
+			if (!(dmax > 0.0))
+				continue;
+			int32_t r = reach_px(ctx, CREASE_REACH * dmax, pix);
+			int32_t tx0, ty0, tx1, ty1;
+			window_tiles(ctx, x, y, r, &tx0, &ty0, &tx1, &ty1);
+			/* A window with many sources reads every thin-th: an average
+			 * along the edges over about CREASE_SOURCES of them. */
+			int32_t listed = sources_near(ctx, x, y, r);
+			if (!listed)
+				continue;
+			int32_t thin = listed > 2 * CREASE_SOURCES
+			               ? listed / CREASE_SOURCES : 1;
+			double W = 0.0, WT = 0.0, WS = 0.0, WL[3] = {0};
+			for (int32_t ty = ty0; ty <= ty1; ty++)
+				for (int32_t tx = tx0; tx <= tx1; tx++) {
+					size_t t = (size_t)ty * ctx->tiles_x + tx;
+					for (int32_t e = ctx->tile_first[t];
+					     e < ctx->tile_first[t + 1]; e += thin) {
+						const crease_source *src = &ctx->sources[e];
+						if (abs(src->x - x) > r || abs(src->y - y) > r ||
+						    (src->x == x && src->y == y))
+							continue;
+						const double *m = src->nrm;
+						double cs = dot3(n, m);
+						if (cs > CREASE_MIN_COS)
+							continue; /* its own face */
+						double D[3];
+						for (int c = 0; c < 3; c++)
+							D[c] = src->pos[c] - P[c];
+						double hq = dot3(D, n), hp = -dot3(D, m);
+						if (!(hq < 0.0 && hp < 0.0))
+							continue;
+						if (job->slot[(size_t)src->y * w + src->x] != k)
+							continue;
+						double sn = sqrt(fmax(1.0 - cs * cs, 1e-12));
+						double tq = -hp / sn, s = -hq / sn;
+						/* the source sits at the edge of the receiver's
+						 * face: else another face's edge */
+						if (s > src->s_limit)
+							continue;
+						double e3[3];
+						cross3(n, m, e3);
+						double along = dot3(D, e3) / sn;
+						double g = sqrt((s + tq) * (s + tq) + along * along);
+						/* Burley's profile, up to a constant: it only
+						 * weighs the sources against each other */
+						float u = (float)(fmax(g, 0.5 * src->pix) / dmax);
+						double wgt = (expf(-u) + expf(-u / 3.0f)) / u;
+						W += wgt;
+						WT += wgt * tq;
+						WS += wgt * src->extent;
+						for (int c = 0; c < 3; c++)
+							WL[c] += wgt * src->light[c];
+					}
+				}
+			if (!(W > 0.0))
+				continue;
+			double tm = WT / W, face = WS / W;
+			double extent = pix / facing(ctx, i, n);
+			float *out = ctx->extra + 3 * i;
+			for (int c = 0; c < 3; c++) {
+				if (!(kappa[c] > 0.0 && d[c] > 0.0))
+					continue;
+				double a = fmax(tm - 0.5 * extent, 0.0),
+				       b = tm + 0.5 * extent;
+				/* from sources at [0, face] from the edge: F(t) -
+				 * F(t + face) */
+				double u = 1.0 / d[c], f = face * u;
+				double mean_F = d[c] * (G_at(ctx, b * u) - G_at(ctx, a * u) -
+				                        G_at(ctx, b * u + f) +
+				                        G_at(ctx, a * u + f)) / extent;
+				out[c] = (float)(kappa[c] * mean_F * WL[c] / W);
+			}
+		}
+}
+
+static void point_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	crease_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < job->width; x++) {
+			size_t i = (size_t)y * job->width + x;
+			double p[3] = {NAN, NAN, NAN};
+			if (job->slot[i] >= 0)
+				view_point(&job->proj, x, y,
+				           job->depth[y * job->depth_stride +
+				                      (int64_t)x * job->depth_channels],
+				           p);
+			for (int c = 0; c < 3; c++)
+				((float *)ctx->pos)[3 * i + c] = (float)p[c];
+		}
+}
+
+sss_result sss__crease(const sss__job *job, int32_t kernel_count,
+                       const sss_image *diff_col, const uint8_t *enabled,
+                       const int32_t *calibration, int32_t num_threads,
+                       float *extra)
+{
+	size_t npix = (size_t)job->width * job->height;
+	double *reach = malloc((kernel_count ? kernel_count : 1) * sizeof *reach);
+	for (int32_t k = 0; reach && k < kernel_count; k++) {
+		/* the table's widest gamma, albedo by albedo */
+		float widest = 0.0f, kappa, gamma;
+		for (int a = 0; a <= 100; a++) {
+			sss__crease_params(calibration[k], 0.01f * a, &kappa, &gamma);
+			widest = fmaxf(widest, gamma);
+		}
+		const float *wr = job->kernels[k].walk_radius;
+		reach[k] = CREASE_REACH * widest * fmax(wr[0], fmax(wr[1], wr[2]));
+	}
+	crease_ctx *ctx = malloc(sizeof *ctx);
+	float *pos = malloc(npix * 3 * sizeof *pos);
+	float *nrm = malloc(npix * 3 * sizeof *nrm);
+	int8_t *across = malloc(npix * sizeof *across);
+	uint8_t *near = malloc(npix);
+	int32_t *first = NULL;
+	crease_source *sources = NULL;
+	sss_result r = ctx && pos && nrm && across && near && reach
+	               ? SSS_OK : SSS_ERR_OUT_OF_MEMORY;
+	if (!r) {
+		*ctx = (crease_ctx){.job = job, .diff_col = diff_col,
+		                    .enabled = enabled, .calibration = calibration,
+		                    .reach = reach, .pos = pos, .nrm = nrm,
+		                    .near = near, .across = across, .extra = extra};
+		tabulate(ctx);
+		memset(extra, 0, npix * 3 * sizeof *extra);
+		sss__parallel_rows(job->height, num_threads, point_rows, ctx);
+		sss__parallel_rows(job->height, num_threads, bend_rows, ctx);
+	}
+	int bent = 0;
+	for (size_t i = 0; !r && !bent && i < npix; i++)
+		bent = near[i] & BENT;
+	if (bent) { /* else no crease: smooth, or only silhouettes */
+		mark_near(ctx);
+		sss__parallel_rows(job->height, num_threads, normal_rows, ctx);
+		sss__parallel_rows(job->height, num_threads, detect_rows, ctx);
+		r = list_sources(ctx, &first, &sources);
+	}
+	if (!r && bent && first[(size_t)ctx->tiles_x * ctx->tiles_y] > 0) {
+		ctx->tile_first = first;
+		ctx->sources = sources;
+		sss__parallel_rows(job->height, num_threads, crease_rows, ctx);
+	}
+	free(first);
+	free(sources);
+	free(reach);
+	free(near);
+	free(across);
+	free(pos);
+	free(nrm);
+	free(ctx);
+	return r;
+}

@@ -1,0 +1,243 @@
+/* test_crease.c - the light a sharp convex edge carries onto the next face
+ * (sss_crease.c): on a 90-degree edge seen at 45 degrees, lit on one face
+ * only, the unlit face gains in all kappa x the integral of F (0.7958 d
+ * for Burley's marginal) times the lit face's light, whatever the pixel
+ * size, and the lit face nothing; nothing on a plane, a sphere, without a
+ * calibration or with the option off; it vanishes with the radius, and on
+ * a face narrower than the radius only the light of that face crosses. */
+#include "sss_internal.h"
+#include "test_util.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define VIEW 0.2 /* metres the orthographic camera sees across */
+
+enum shape { WEDGE, PLANE, SPHERE };
+
+/* A frame n x n: the lower face (the edge is the middle row boundary) lit
+ * by 1, the upper one unlit, DiffCol `albedo`; `face` metres of each face
+ * seen from the edge (beyond: background). */
+typedef struct frame {
+	int n;
+	float *dd, *col, *z, *idx, *out;
+	sss_passes ps;
+	sss_camera cam;
+	sss_options opt;
+} frame;
+
+static void frame_make(frame *f, int n, enum shape s, float albedo,
+                       double face)
+{
+	f->n = n;
+	f->dd = malloc(sizeof(float) * 3 * n * n);
+	f->col = malloc(sizeof(float) * 3 * n * n);
+	f->z = malloc(sizeof(float) * n * n);
+	f->idx = malloc(sizeof(float) * n * n);
+	f->out = malloc(sizeof(float) * 3 * n * n);
+	double pix = VIEW / n;
+	for (int y = 0; y < n; y++)
+		for (int x = 0; x < n; x++) {
+			int i = y * n + x;
+			double u = (x + 0.5) * pix - VIEW / 2,
+			       v = VIEW / 2 - (y + 0.5) * pix;
+			double z = 4.0 + fabs(v); /* both faces recede at 45 degrees */
+			int inside = fabs(v) * sqrt(2.0) < face;
+			if (s == PLANE)
+				z = 4.0 + 0.3 * v, inside = 1;
+			if (s == SPHERE) { /* radius VIEW / 3 */
+				double a = VIEW / 3, r2 = u * u + v * v;
+				inside = r2 < a * a;
+				z = inside ? 4.0 - sqrt(a * a - r2) : 0.0;
+			}
+			f->z[i] = inside ? (float)z : 1e10f;
+			f->idx[i] = inside ? 1.0f : 0.0f;
+			float light = s == WEDGE ? (v < 0.0 ? 1.0f : 0.0f)
+			                         : (u < 0.0 ? 1.0f : 0.2f);
+			for (int c = 0; c < 3; c++) {
+				f->dd[3 * i + c] = light;
+				f->col[3 * i + c] = albedo;
+			}
+		}
+	memset(&f->ps, 0, sizeof f->ps);
+	f->ps.diff_dir = (sss_image){f->dd, n, n, 3, 0};
+	f->ps.diff_col = (sss_image){f->col, n, n, 3, 0};
+	f->ps.depth = (sss_image){f->z, n, n, 1, 0};
+	f->ps.index_ma = (sss_image){f->idx, n, n, 1, 0};
+	sss_camera_default(&f->cam);
+	f->cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	f->cam.ortho_scale = VIEW;
+	sss_options_default(&f->opt);
+	f->opt.num_threads = 1;
+	f->opt.method = SSS_METHOD_SEPARABLE;
+}
+
+static void frame_free(frame *f)
+{
+	free(f->dd);
+	free(f->col);
+	free(f->z);
+	free(f->idx);
+	free(f->out);
+}
+
+/* Burley matched to 4.x's Random Walk (Skin), radius r m. */
+static sss_material skin_walk(float r, float albedo)
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
+	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	for (int c = 0; c < 3; c++) {
+		m.albedo[c] = albedo;
+		m.radius[c] = r;
+	}
+	return m;
+}
+
+/* The scattered light with the crease term (crease 1) or without, into
+ * out (3 x n x n). */
+static sss_result run(frame *f, const sss_material *m, int crease,
+                      float *out)
+{
+	f->opt.crease = crease;
+	sss_image ol = {out, f->n, f->n, 3, 0};
+	return sss_apply(&f->ps, &f->cam, m, 1, &f->opt, NULL, &ol, NULL, 0);
+}
+
+/* Per unit length of edge, in metres times light: what the crease term
+ * added to the upper face (sum over its rows of a middle column, each row
+ * sqrt(2) pixels of face) and to the lower one; and the lower face's
+ * light far from the edge. */
+static void crease_sums(const frame *f, const float *with,
+                        const float *without, double *upper, double *lower,
+                        double *plateau)
+{
+	int n = f->n, x = n / 2;
+	double step = VIEW / n * sqrt(2.0);
+	*upper = *lower = 0.0;
+	for (int y = 0; y < n; y++) {
+		int i = 3 * (y * n + x);
+		double d = (double)with[i] - without[i];
+		if (y < n / 2)
+			*upper += d * step;
+		else
+			*lower += fabs(d) * step;
+	}
+	*plateau = with[3 * ((n - 3) * n + x)];
+}
+
+static void test_wedge(void)
+{
+	const float albedos[] = {0.3f, 0.55f, 0.85f};
+	const int sizes[] = {64, 192};
+	for (int a = 0; a < 3; a++) {
+		double per_d[2];
+		for (int s = 0; s < 2; s++) {
+			frame f;
+			frame_make(&f, sizes[s], WEDGE, albedos[a], 1.0);
+			sss_material m = skin_walk(0.03f, albedos[a]);
+			float *without = malloc(sizeof(float) * 3 * f.n * f.n);
+			CHECK_STATUS("wedge-status", SSS_OK, run(&f, &m, 1, f.out));
+			CHECK_STATUS("wedge-off-status", SSS_OK,
+			             run(&f, &m, 0, without));
+			double up, low, plateau;
+			crease_sums(&f, f.out, without, &up, &low, &plateau);
+			float kappa, gamma;
+			sss__crease_params(m.calibration, albedos[a], &kappa, &gamma);
+			double want = kappa * 0.7958 * gamma * 0.03 * plateau;
+			per_d[s] = up / want;
+			CHECK("wedge-total", fabs(up / want - 1.0) < 0.05,
+			      "albedo %g, %d px: the unlit face gained %g, expected "
+			      "%g", (double)albedos[a], f.n, up, want);
+			CHECK("wedge-lit-face", low == 0.0,
+			      "albedo %g: the lit face changed by %g",
+			      (double)albedos[a], low);
+			free(without);
+			frame_free(&f);
+		}
+		CHECK("wedge-pixel-size", fabs(per_d[0] / per_d[1] - 1.0) < 0.05,
+		      "albedo %g: %g at 64 px, %g at 192 px", (double)albedos[a],
+		      per_d[0], per_d[1]);
+	}
+}
+
+/* Nothing where there is no crease, without a calibration, with the
+ * option off; nothing left as the radius vanishes. */
+static void test_none(void)
+{
+	const enum shape shapes[] = {PLANE, SPHERE};
+	for (int s = 0; s < 2; s++) {
+		frame f;
+		frame_make(&f, 96, shapes[s], 0.6f, 1.0);
+		sss_material m = skin_walk(0.03f, 0.6f);
+		float *without = malloc(sizeof(float) * 3 * 96 * 96);
+		CHECK_STATUS("none-status", SSS_OK, run(&f, &m, 1, f.out));
+		CHECK_STATUS("none-off-status", SSS_OK, run(&f, &m, 0, without));
+		CHECK("none-smooth", !memcmp(f.out, without,
+		                             sizeof(float) * 3 * 96 * 96),
+		      "shape %d: the crease term changed a surface without one", s);
+		free(without);
+		frame_free(&f);
+	}
+	frame f;
+	frame_make(&f, 96, WEDGE, 0.6f, 1.0);
+	float *without = malloc(sizeof(float) * 3 * 96 * 96);
+	sss_material m = skin_walk(0.03f, 0.6f);
+	m.calibration = SSS_CALIBRATION_NONE;
+	CHECK_STATUS("none-cal-status", SSS_OK, run(&f, &m, 1, f.out));
+	CHECK_STATUS("none-cal-off-status", SSS_OK, run(&f, &m, 0, without));
+	CHECK("none-uncalibrated", !memcmp(f.out, without,
+	                                   sizeof(float) * 3 * 96 * 96),
+	      "a material without a calibration gained crease light");
+	/* As the radius vanishes, so does what crosses the edge. */
+	double last = INFINITY;
+	int falls = 1;
+	for (float r = 0.01f; r > 1e-7f; r *= 0.1f) {
+		m = skin_walk(r, 0.6f);
+		run(&f, &m, 1, f.out);
+		run(&f, &m, 0, without);
+		double up, low, plateau;
+		crease_sums(&f, f.out, without, &up, &low, &plateau);
+		falls &= up <= last;
+		last = up;
+	}
+	CHECK("none-vanishing", falls && last < 1e-9, "at 1e-7 m the unlit "
+	      "face still gains %g", last);
+	free(without);
+	frame_free(&f);
+}
+
+/* A lit face 12 mm wide under a radius of 1 m: the walk spreads its light
+ * over everything, and what crosses the edge is at most what entered
+ * that face, not the measured half-space's kappa x 0.8 d. */
+static void test_narrow(void)
+{
+	frame f;
+	frame_make(&f, 96, WEDGE, 0.6f, 0.012);
+	float *without = malloc(sizeof(float) * 3 * 96 * 96);
+	sss_material m = skin_walk(1.0f, 0.6f);
+	CHECK_STATUS("narrow-status", SSS_OK, run(&f, &m, 1, f.out));
+	CHECK_STATUS("narrow-off-status", SSS_OK, run(&f, &m, 0, without));
+	double up, low, plateau;
+	crease_sums(&f, f.out, without, &up, &low, &plateau);
+	float kappa, gamma;
+	sss__crease_params(m.calibration, 0.6f, &kappa, &gamma);
+	double entered = 0.012 * without[3 * ((f.n / 2 + 1) * f.n + f.n / 2)];
+	double half_space = kappa * 0.7958 * gamma * 1.0 * entered / 0.012;
+	CHECK("narrow-bounded", up > 0.0 && up < 0.5 * entered &&
+	      up < 0.01 * half_space, "gained %g: the face took in %g, a "
+	      "half-space would give %g", up, entered, half_space);
+	free(without);
+	frame_free(&f);
+}
+
+int main(void)
+{
+	test_wedge();
+	test_none();
+	test_narrow();
+	return tu_finish("test_crease");
+}
