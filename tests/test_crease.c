@@ -2,7 +2,7 @@
  * (sss_crease.c): on a 90-degree edge seen at 45 degrees, lit on one face
  * only, the unlit face gains in all kappa x the integral of F (0.7958 d
  * for Burley's marginal) times the lit face's light, whatever the pixel
- * size, and the lit face nothing; nothing on a plane, a sphere, without a
+ * size, orthographic or in perspective, and the lit face nothing; nothing on a plane, a sphere, without a
  * calibration or with the option off; it vanishes with the radius, and on
  * a face narrower than the radius only the light of that face crosses. */
 #include "sss_internal.h"
@@ -22,15 +22,19 @@ enum shape { WEDGE, PLANE, SPHERE };
 typedef struct frame {
 	int n;
 	float *dd, *col, *z, *idx, *out;
+	double *pt; /* each pixel's view-space point */
 	sss_passes ps;
 	sss_camera cam;
 	sss_options opt;
 } frame;
 
+/* Orthographic VIEW metres wide at depth 4, or (perspective) a 90 mm lens
+ * seeing VIEW metres across at depth 0.5, the wedge's edge there. */
 static void frame_make(frame *f, int n, enum shape s, float albedo,
-                       double face)
+                       double face, int perspective)
 {
 	f->n = n;
+	f->pt = malloc(sizeof(double) * 3 * n * n);
 	f->dd = malloc(sizeof(float) * 3 * n * n);
 	f->col = malloc(sizeof(float) * 3 * n * n);
 	f->z = malloc(sizeof(float) * n * n);
@@ -43,6 +47,11 @@ static void frame_make(frame *f, int n, enum shape s, float albedo,
 			double u = (x + 0.5) * pix - VIEW / 2,
 			       v = VIEW / 2 - (y + 0.5) * pix;
 			double z = 4.0 + fabs(v); /* both faces recede at 45 degrees */
+			if (perspective) { /* the ray (u, v, 0.5) t/0.5 meets them */
+				double t = 0.5 / (1.0 - fabs(v) / 0.5);
+				u *= t / 0.5, v *= t / 0.5, z = t;
+			}
+			f->pt[3 * i] = u, f->pt[3 * i + 1] = v, f->pt[3 * i + 2] = z;
 			int inside = fabs(v) * sqrt(2.0) < face;
 			if (s == PLANE)
 				z = 4.0 + 0.3 * v, inside = 1;
@@ -68,6 +77,11 @@ static void frame_make(frame *f, int n, enum shape s, float albedo,
 	sss_camera_default(&f->cam);
 	f->cam.type = SSS_CAMERA_ORTHOGRAPHIC;
 	f->cam.ortho_scale = VIEW;
+	if (perspective) {
+		f->cam.type = SSS_CAMERA_PERSPECTIVE;
+		f->cam.lens_mm = 36.0 * 0.5 / VIEW;
+		f->cam.sensor_width_mm = 36.0;
+	}
 	sss_options_default(&f->opt);
 	f->opt.num_threads = 1;
 	f->opt.method = SSS_METHOD_SEPARABLE;
@@ -80,6 +94,7 @@ static void frame_free(frame *f)
 	free(f->z);
 	free(f->idx);
 	free(f->out);
+	free(f->pt);
 }
 
 /* Burley matched to 4.x's Random Walk (Skin), radius r m. */
@@ -109,17 +124,22 @@ static sss_result run(frame *f, const sss_material *m, int crease,
 
 /* Per unit length of edge, in metres times light: what the crease term
  * added to the upper face (sum over its rows of a middle column, each row
- * sqrt(2) pixels of face) and to the lower one; and the lower face's
- * light far from the edge. */
+ * the length of face it covers) and to the lower one; and the lower
+ * face's light far from the edge. */
 static void crease_sums(const frame *f, const float *with,
                         const float *without, double *upper, double *lower,
                         double *plateau)
 {
 	int n = f->n, x = n / 2;
-	double step = VIEW / n * sqrt(2.0);
 	*upper = *lower = 0.0;
-	for (int y = 0; y < n; y++) {
+	for (int y = 1; y < n - 1; y++) {
 		int i = 3 * (y * n + x);
+		/* the next row further from the edge, on the same face */
+		const double *a = f->pt + i, *b = f->pt + i + (y < n / 2 ? -3 * n
+		                                                          : 3 * n);
+		double step = sqrt((b[0] - a[0]) * (b[0] - a[0]) +
+		                   (b[1] - a[1]) * (b[1] - a[1]) +
+		                   (b[2] - a[2]) * (b[2] - a[2]));
 		double d = (double)with[i] - without[i];
 		if (y < n / 2)
 			*upper += d * step;
@@ -129,7 +149,7 @@ static void crease_sums(const frame *f, const float *with,
 	*plateau = with[3 * ((n - 3) * n + x)];
 }
 
-static void test_wedge(void)
+static void test_wedge(int perspective)
 {
 	const float albedos[] = {0.3f, 0.55f, 0.85f};
 	const int sizes[] = {64, 192};
@@ -137,7 +157,7 @@ static void test_wedge(void)
 		double per_d[2];
 		for (int s = 0; s < 2; s++) {
 			frame f;
-			frame_make(&f, sizes[s], WEDGE, albedos[a], 1.0);
+			frame_make(&f, sizes[s], WEDGE, albedos[a], 1.0, perspective);
 			sss_material m = skin_walk(0.03f, albedos[a]);
 			float *without = malloc(sizeof(float) * 3 * f.n * f.n);
 			CHECK_STATUS("wedge-status", SSS_OK, run(&f, &m, 1, f.out));
@@ -150,8 +170,9 @@ static void test_wedge(void)
 			double want = kappa * 0.7958 * gamma * 0.03 * plateau;
 			per_d[s] = up / want;
 			CHECK("wedge-total", fabs(up / want - 1.0) < 0.05,
-			      "albedo %g, %d px: the unlit face gained %g, expected "
-			      "%g", (double)albedos[a], f.n, up, want);
+			      "albedo %g, %d px, perspective %d: the unlit face gained "
+			      "%g, expected %g", (double)albedos[a], f.n, perspective,
+			      up, want);
 			CHECK("wedge-lit-face", low == 0.0,
 			      "albedo %g: the lit face changed by %g",
 			      (double)albedos[a], low);
@@ -171,7 +192,7 @@ static void test_none(void)
 	const enum shape shapes[] = {PLANE, SPHERE};
 	for (int s = 0; s < 2; s++) {
 		frame f;
-		frame_make(&f, 96, shapes[s], 0.6f, 1.0);
+		frame_make(&f, 96, shapes[s], 0.6f, 1.0, 0);
 		sss_material m = skin_walk(0.03f, 0.6f);
 		float *without = malloc(sizeof(float) * 3 * 96 * 96);
 		CHECK_STATUS("none-status", SSS_OK, run(&f, &m, 1, f.out));
@@ -183,7 +204,7 @@ static void test_none(void)
 		frame_free(&f);
 	}
 	frame f;
-	frame_make(&f, 96, WEDGE, 0.6f, 1.0);
+	frame_make(&f, 96, WEDGE, 0.6f, 1.0, 0);
 	float *without = malloc(sizeof(float) * 3 * 96 * 96);
 	sss_material m = skin_walk(0.03f, 0.6f);
 	m.calibration = SSS_CALIBRATION_NONE;
@@ -216,7 +237,7 @@ static void test_none(void)
 static void test_narrow(void)
 {
 	frame f;
-	frame_make(&f, 96, WEDGE, 0.6f, 0.012);
+	frame_make(&f, 96, WEDGE, 0.6f, 0.012, 0);
 	float *without = malloc(sizeof(float) * 3 * 96 * 96);
 	sss_material m = skin_walk(1.0f, 0.6f);
 	CHECK_STATUS("narrow-status", SSS_OK, run(&f, &m, 1, f.out));
@@ -236,7 +257,8 @@ static void test_narrow(void)
 
 int main(void)
 {
-	test_wedge();
+	test_wedge(0);
+	test_wedge(1);
 	test_none();
 	test_narrow();
 	return tu_finish("test_crease");
