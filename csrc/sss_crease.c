@@ -374,18 +374,27 @@ static float signal_at(const sss__job *job, size_t j, int c)
 	return job->signal[(int64_t)j * job->signal_px + c * job->signal_ch];
 }
 
+/* A reach in scene units as a window's half-size in pixels. */
+static int32_t reach_px(const crease_ctx *ctx, double reach, double pix)
+{
+	double most = (double)ctx->job->width + ctx->job->height;
+	return (int32_t)ceil(fmax(fmin(reach / pix, most), 2.0));
+}
+
 /* How far the face of pixel (x, y) goes on away from the neighbour dir
  * across its crease, along the screen line through both, while its
  * points stay on the pixel's tangent plane: light can only cross the edge
- * from where the face is. */
-#define EXTENT_MAX_PX 1024
+ * from where the face is. Past the material's reach F has no mass left,
+ * so the march stops there. */
 static double face_extent(const crease_ctx *ctx, int32_t x, int32_t y,
                           int dir, const double P[3], const double n[3])
 {
 	const sss__job *job = ctx->job;
 	int16_t k = job->slot[(size_t)y * job->width + x];
 	double far = 0.0;
-	for (int32_t s = 1; s <= EXTENT_MAX_PX; s++) {
+	int32_t steps = reach_px(ctx, ctx->reach[k],
+	                         pixel_size(&job->proj, P[2])) + 1;
+	for (int32_t s = 1; s <= steps; s++) {
 		int32_t u = x - s * step_x[dir], v = y - s * step_y[dir];
 		if (u < 0 || v < 0 || u >= job->width || v >= job->height)
 			break;
@@ -471,13 +480,6 @@ static sss_result list_sources(crease_ctx *ctx, int32_t **first_out,
 	*first_out = first;
 	*sources_out = src;
 	return SSS_OK;
-}
-
-/* A reach in scene units as a window's half-size in pixels. */
-static int32_t reach_px(const crease_ctx *ctx, double reach, double pix)
-{
-	double most = (double)ctx->job->width + ctx->job->height;
-	return (int32_t)ceil(fmax(fmin(reach / pix, most), 2.0));
 }
 
 static void window_tiles(const crease_ctx *ctx, int32_t x, int32_t y,
