@@ -251,6 +251,20 @@ def render_to(scene, path, seed):
     return read_exr(path), seconds
 
 
+def walk_and_off(scene, mat, albedo, radius, args, name):
+    """Renders the material with the random walk (seed 2) and with
+    Subsurface 0 (seed 1, kept as work/NAME_off_TAG.exr for libsss): the
+    two Combined images and the SSS-off render's path."""
+    tag = f"{radius}_{albedo[0]}"
+    set_material(mat, albedo, radius, 1.0, args.method)
+    rw, _ = render_to(scene, os.path.join(args.out, "work",
+                                          f"{name}_rw_{tag}.exr"), 2)
+    set_material(mat, albedo, radius, 0.0, args.method)
+    inp = os.path.join(args.out, "work", f"{name}_off_{tag}.exr")
+    off, _ = render_to(scene, inp, 1)
+    return rgb(rw, "Combined"), rgb(off, "Combined"), inp
+
+
 def albedo_sets(args):
     if args.albedos:
         return [tuple(float(v) for v in s.split(",")) for s in
@@ -324,7 +338,9 @@ def write_csv(path, rows):
 # ---------------------------------------------------------- edge, texture
 
 def scene_json(path, albedo, radius, mapping, texturing="post",
-               calibration=None):
+               calibration=None, **top):
+    """One Burley material as libsss's scene file; `top`: top-level keys
+    over the defaults (method, taps, ...)."""
     mat = {"pass_index": 1, "profile": "burley",
            "radius": [radius] * 3, "mapping": mapping,
            "albedo": [float(a) for a in albedo], "texturing": texturing}
@@ -336,7 +352,7 @@ def scene_json(path, albedo, radius, mapping, texturing="post",
                        "sensor_fit": "AUTO", "lens": 50,
                        "pixel_aspect_x": 1, "pixel_aspect_y": 1},
             "unit_scale": 1.0, "method": "separable-exact", "taps": 65,
-            "materials": [mat]}
+            "materials": [mat], **top}
     with open(path, "w") as f:
         json.dump(desc, f)
 
@@ -381,15 +397,8 @@ def part_edge(args):
             occluder(scene)
             setup_render(scene, args, None)
             n = args.size
-            tag = f"{radius}_{albedo[0]}"
-            set_material(mat, albedo, radius, 1.0, args.method)
-            rw, _ = render_to(scene, os.path.join(args.out, "work",
-                                                  f"edge_rw_{tag}.exr"), 2)
-            rw = rgb(rw, "Combined")
-            set_material(mat, albedo, radius, 0.0, args.method)
-            inp = os.path.join(args.out, "work", f"edge_off_{tag}.exr")
-            off, _ = render_to(scene, inp, 1)
-            off = rgb(off, "Combined")
+            rw, off, inp = walk_and_off(scene, mat, albedo, radius, args,
+                                        "edge")
             # Pixel centres in metres, x = 0 at the edge (frame centre).
             px = (np.arange(n) + 0.5) / n * VIEW - VIEW / 2
             prw = profile_along(rw, n)
@@ -543,32 +552,19 @@ def part_crease(args):
             world(scene, 0.0)
             sun(scene)
             setup_render(scene, args, None)
-            tag = f"{radius}_{albedo[0]}"
-            set_material(mat, albedo, radius, 1.0, args.method)
-            rw, _ = render_to(scene, os.path.join(args.out, "work",
-                                                  f"crease_rw_{tag}.exr"), 2)
-            rw = rgb(rw, "Combined")
-            set_material(mat, albedo, radius, 0.0, args.method)
-            inp = os.path.join(args.out, "work", f"crease_off_{tag}.exr")
-            off, _ = render_to(scene, inp, 1)
-            off = rgb(off, "Combined")
-            desc = inp.replace(".exr", ".json")
-            scene_json(desc, albedo, radius, mapping, calibration=calibration)
-            with open(desc) as f:
-                d = json.load(f)
-            d["method"] = "separable"
-            d["taps"] = 33
-            d["crease"] = 0
-            with open(desc, "w") as f:
-                json.dump(d, f)
-            ours = scatter(inp, desc, inp.replace(".exr", "_sss.exr"))
-            # And with the crease term, as the library ships it.
-            d["crease"] = 1
-            with_desc = desc.replace(".json", "_crease.json")
-            with open(with_desc, "w") as f:
-                json.dump(d, f)
-            creased = scatter(inp, with_desc,
-                              inp.replace(".exr", "_crease_sss.exr"))
+            rw, off, inp = walk_and_off(scene, mat, albedo, radius, args,
+                                        "crease")
+            # Without the crease term (what its table is fitted to), and
+            # with it, as the library ships it.
+            images = []
+            for crease in (0, 1):
+                desc = inp.replace(".exr", f"_crease{crease}.json")
+                scene_json(desc, albedo, radius, mapping,
+                           calibration=calibration, method="separable",
+                           taps=33, crease=crease)
+                images.append(scatter(inp, desc, desc.replace(".json",
+                                                              "_sss.exr")))
+            ours, creased = images
             # Rows top to bottom: the top face, then the front face; one
             # value per row over the middle half of the columns.
             cols = slice(n // 4, 3 * n // 4)

@@ -99,11 +99,18 @@ void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
 		out[2] = q[2];
 		return;
 	}
-	double z = job->depth[y * job->depth_stride + (int64_t)x *
-	                      job->depth_channels];
-	double scale = job->proj.ortho ? 1.0 : z;
-	out[0] = (x + 0.5 - job->proj.cx) / job->proj.fx * scale;
-	out[1] = (job->proj.cy - (y + 0.5)) / job->proj.fy * scale;
+	sss__view_point(&job->proj, x, y,
+	                job->depth[y * job->depth_stride +
+	                           (int64_t)x * job->depth_channels],
+	                out);
+}
+
+void sss__view_point(const sss__projection *p, int32_t x, int32_t y,
+                     double z, double out[3])
+{
+	double scale = p->ortho ? 1.0 : z;
+	out[0] = (x + 0.5 - p->cx) / p->fx * scale;
+	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
 	out[2] = z;
 }
 

@@ -74,15 +74,6 @@ typedef struct crease_ctx {
 static const int8_t step_x[8] = {1, 1, 0, -1, -1, -1, 0, 1};
 static const int8_t step_y[8] = {0, 1, 1, 1, 0, -1, -1, -1};
 
-static void view_point(const sss__projection *p, int32_t x, int32_t y,
-                       double z, double out[3])
-{
-	double scale = p->ortho ? 1.0 : z;
-	out[0] = (x + 0.5 - p->cx) / p->fx * scale;
-	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
-	out[2] = z;
-}
-
 /* The unit vector from the point towards the camera. */
 static void to_camera(const sss__projection *p, const float *pt,
                       double v[3])
@@ -628,7 +619,7 @@ static void point_rows(void *vctx, int32_t y0, int32_t y1)
 			size_t i = (size_t)y * job->width + x;
 			double p[3] = {NAN, NAN, NAN};
 			if (job->slot[i] >= 0)
-				view_point(&job->proj, x, y,
+				sss__view_point(&job->proj, x, y,
 				           job->depth[y * job->depth_stride +
 				                      (int64_t)x * job->depth_channels],
 				           p);

@@ -26,15 +26,6 @@
 /* A point farther than this many radii away lies on another surface. */
 #define RING_REACH 3.0
 
-static void view_point(const sss__projection *p, int32_t x, int32_t y,
-                       double z, double out[3])
-{
-	double scale = p->ortho ? 1.0 : z;
-	out[0] = (x + 0.5 - p->cx) / p->fx * scale;
-	out[1] = (p->cy - (y + 0.5)) / p->fy * scale;
-	out[2] = z;
-}
-
 /* Points of the circle of radius rho (scene units, r_px on screen) that
  * lie on the surface of pixel (x, y); returns how many. */
 static int ring_points(const sss_image *depth, const int16_t *slot,
@@ -58,7 +49,7 @@ static int ring_points(const sss_image *depth, const int16_t *slot,
 		double z = sss__at(depth, qx, qy)[0];
 		if (!(z > 0.0) || !isfinite(z))
 			continue;
-		view_point(p, qx, qy, z, q[i]);
+		sss__view_point(p, qx, qy, z, q[i]);
 		double d2 = 0.0;
 		for (int c = 0; c < 3; c++)
 			d2 += (q[i][c] - here[c]) * (q[i][c] - here[c]);
@@ -160,7 +151,7 @@ double sss__mean_curvature(const sss_image *depth, const int16_t *slot,
 	if (!(z > 0.0) || !isfinite(z) || !(rho > 0.0) || !isfinite(rho))
 		return 0.0;
 	double here[3];
-	view_point(p, x, y, z, here);
+	sss__view_point(p, x, y, z, here);
 	double px_per_unit = fmin(sss__pixels_per_unit_x(p, z),
 	                          sss__pixels_per_unit_y(p, z));
 	if (!(px_per_unit > 0.0) || !isfinite(px_per_unit))

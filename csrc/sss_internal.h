@@ -155,6 +155,10 @@ sss_result sss__projection_make(const sss_camera *cam, int32_t width,
                                 char *errbuf, size_t errbuf_len);
 void sss__pixel_position(const sss__job *job, int32_t x, int32_t y,
                          double out[3]);
+/* The view-space point of pixel (x, y) at depth z (the Depth pass's
+ * planar view Z). */
+void sss__view_point(const sss__projection *p, int32_t x, int32_t y,
+                     double z, double out[3]);
 /* |cos| of the angle between the surface at pixel (x, y) and the ray to
  * the camera, from the Depth pass (the surface's slope towards the
  * neighbours of the same slot, on each axis the side of nearer depth);

@@ -18,6 +18,7 @@ across the edge: the walk, the library without and with the term.
 """
 import argparse
 import csv
+import os
 import sys
 
 import numpy as np
@@ -51,12 +52,36 @@ def row_means(t, step, d):
     return np.array(res)
 
 
+REQUIRED = ("radius", "albedo", "t", "rw", "ours")
+
+
 def load(path):
-    groups = {}
-    with open(path) as f:
-        for row in csv.DictReader(f):
-            groups.setdefault(float(row["albedo"]), {}).setdefault(
-                float(row["radius"]), []).append(row)
+    """The run's rows by albedo and radius; exits with a message naming
+    the file when it cannot be read or is not a crease run."""
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            missing = [c for c in REQUIRED
+                       if c not in (reader.fieldnames or [])]
+            if missing:
+                sys.exit(f"fit_crease.py: {path}: not a calibrate.py "
+                         f"--part crease table (no column "
+                         f"{', '.join(missing)})")
+            groups = {}
+            for line, row in enumerate(reader, start=2):
+                try:
+                    key = (float(row["albedo"]), float(row["radius"]))
+                    float(row["t"]), float(row["rw"]), float(row["ours"])
+                except (TypeError, ValueError):
+                    sys.exit(f"fit_crease.py: {path}, line {line}: not a "
+                             f"number in {', '.join(REQUIRED)}")
+                groups.setdefault(key[0], {}).setdefault(key[1],
+                                                         []).append(row)
+    except OSError as e:
+        sys.exit(f"fit_crease.py: cannot read {path}: {e.strerror}")
+    if not groups or any(len(rows) < 2 for by in groups.values()
+                         for rows in by.values()):
+        sys.exit(f"fit_crease.py: {path}: no profile of two rows or more")
     return groups
 
 
@@ -73,8 +98,8 @@ def plot(groups, albedos, path):
         for key, label, style in (("rw", "random walk", "k-"),
                                   ("ours", "library, no crease term", "C0--"),
                                   ("crease", "library", "C1-")):
-            ax.plot(t, [float(r[key]) for r in rows], style, label=label,
-                    lw=1.4)
+            ax.plot(t, [float(r.get(key, "nan")) for r in rows], style,
+                    label=label, lw=1.4)
         ax.axvline(0.0, color="0.6", lw=0.8)
         ax.set_xlim(-30, 40)
         ax.set_title(f"albedo {albedo:g}, radius {radius * 100:g} cm")
@@ -82,7 +107,10 @@ def plot(groups, albedos, path):
     np.atleast_1d(axes)[0].set_ylabel("light over the lit face's")
     np.atleast_1d(axes)[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    root, ext = os.path.splitext(path)
+    partial = f"{root}.partial{ext}"  # whole or not at all
+    fig.savefig(partial, dpi=110)
+    os.replace(partial, path)
     print("wrote", path)
 
 
@@ -93,12 +121,16 @@ def main(argv):
     p.add_argument("--albedos", default="0.3,0.55,0.85",
                    help="for --plot, comma-separated")
     args = p.parse_args(argv)
+    try:
+        albedos = [float(a) for a in args.albedos.split(",")]
+    except ValueError:
+        p.error(f"--albedos {args.albedos!r}: comma-separated numbers")
+    groups = load(args.csv)
     if args.plot:
-        plot(load(args.csv), [float(a) for a in args.albedos.split(",")],
-             args.plot)
+        plot(groups, albedos, args.plot)
     print(f"{'albedo':>6} {'gamma':>6} {'kappa':>7} {'fit':>7} "
           f"{'without':>8} {'with':>7}")
-    for albedo, by_radius in sorted(load(args.csv).items()):
+    for albedo, by_radius in sorted(groups.items()):
         data = []
         for radius, rows in by_radius.items():
             t = np.array([float(r["t"]) for r in rows])
