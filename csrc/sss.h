@@ -649,6 +649,54 @@ SSS_API sss_result sss_process_exr(const char *input, const char *output,
                                    sss_timings *timings, char *errbuf,
                                    size_t errbuf_len);
 
+/* ------------------------------------------------ a frame kept in memory
+ * (sss_frame.c): one EXR frame's passes read once and kept decoded, then
+ * scattered again with any scene description (materials and options)
+ * into the caller's buffers, with no file read or written: what re-tuning
+ * SSS after the render needs. sss_process_exr is sss_frame_read,
+ * sss_frame_scatter and sss_frame_write in a row. A frame may be scattered
+ * from several threads at once; reading, writing and freeing it may not
+ * overlap anything else on it. */
+
+typedef struct sss_frame sss_frame;
+
+/* Reads the file and finds the render passes of `layer` (NULL: the first
+ * with DiffDir) and the back-light layer's, as sss_process_exr does; the
+ * same errors, naming the file and layer. */
+SSS_API sss_result sss_frame_read(const char *path, const char *layer,
+                                  const sss_exr_options *opt,
+                                  sss_frame **out, char *errbuf,
+                                  size_t errbuf_len);
+SSS_API void sss_frame_free(sss_frame *frame); /* NULL is fine */
+SSS_API int32_t sss_frame_width(const sss_frame *frame);
+SSS_API int32_t sss_frame_height(const sss_frame *frame);
+/* The view layer scattered; valid while the frame lives. */
+SSS_API const char *sss_frame_layer(const sss_frame *frame);
+/* Every pass of the file (sss_exr_pass and sss_exr_find read it). */
+SSS_API const sss_exr *sss_frame_exr(const sss_frame *frame);
+
+/* Scatters the frame with the scene's camera, materials and options (the
+ * process options' overrides, threads, progress and chosen_methods as in
+ * sss_process_exr; their exr and layer fields are not used) into
+ * out_combined (RGB or RGBA) and out_diffuse_light (RGB, optional), as
+ * sss_apply. seconds (optional) receives the time the scatter took. */
+SSS_API sss_result sss_frame_scatter(const sss_frame *frame,
+                                     const sss_scene *scene,
+                                     const sss_process_options *opt,
+                                     const sss_image *out_combined,
+                                     const sss_image *out_diffuse_light,
+                                     double *seconds, char *errbuf,
+                                     size_t errbuf_len);
+
+/* Writes the frame's file with the SSS layer (Combined RGBA and DiffLight
+ * RGB, width x height x 4 and x 3 floats, packed) added, atomically, as
+ * sss_exr_write; the layer stays in the frame (a later write replaces
+ * it). */
+SSS_API sss_result sss_frame_write(sss_frame *frame, const char *path,
+                                   const float *combined, const float *light,
+                                   const sss_exr_options *opt, char *errbuf,
+                                   size_t errbuf_len);
+
 #ifdef __cplusplus
 }
 #endif

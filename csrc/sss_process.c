@@ -1,6 +1,7 @@
 /* sss_process.c - one EXR frame end to end: read, scatter, add the SSS
  * layer, write. Shared by the `sss` command and the Blender add-on so that
- * both take exactly the same path. */
+ * both take exactly the same path (a frame kept in memory, sss_frame.c,
+ * is what it reads into). */
 #include "sss_internal.h"
 
 #include <stdlib.h>
@@ -28,21 +29,6 @@ void sss_process_options_default(sss_process_options *opt)
 	opt->samples = -1;
 }
 
-/* The library passes pixels with a bad depth through one by one; a Depth
- * pass without a single usable value is a broken file. */
-static int has_usable_depth(const sss_image *depth)
-{
-	int64_t stride = depth->row_stride ? depth->row_stride
-	                 : (int64_t)depth->width * depth->channels;
-	for (int32_t y = 0; y < depth->height; y++)
-		for (int32_t x = 0; x < depth->width; x++) {
-			float z = depth->data[y * stride + (int64_t)x * depth->channels];
-			if (z > 0.0f && z < 3.0e38f)
-				return 1;
-		}
-	return 0;
-}
-
 /* Same file, by name or by inode: never write over an input. */
 static int same_file(const char *a, const char *b)
 {
@@ -52,55 +38,6 @@ static int same_file(const char *a, const char *b)
 	if (stat(a, &sa) || stat(b, &sb))
 		return 0;
 	return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-}
-
-/* The back-light layer's passes (SSS_BACKLIGHT_LAYER: DiffDir, DiffInd and
- * the thickness and facing AOVs) into passes; a thickness stored squared
- * becomes its square root in *thick_buf (allocated). No layer: nothing. */
-static sss_result back_light_passes(const sss_exr *exr, const char *layer,
-                                    sss_passes *passes, float **thick_buf,
-                                    const char *in, char *err, size_t errlen)
-{
-	sss_image v;
-	if (strcmp(layer, SSS_BACKLIGHT_LAYER) == 0 ||
-	    sss_exr_find(exr, SSS_BACKLIGHT_LAYER, "DiffDir", &v) != SSS_OK)
-		return SSS_OK;
-	if (v.channels < 3)
-		return sss__fail(err, errlen, SSS_ERR_MISSING_PASS, "%s: layer '%s'"
-		                 ": pass DiffDir has %d channel(s), needs RGB", in,
-		                 SSS_BACKLIGHT_LAYER, v.channels);
-	passes->back_dir = v;
-	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, "DiffInd", &v) == SSS_OK &&
-	    v.channels >= 3)
-		passes->back_ind = v;
-	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_FACING_PASS, &v) ==
-	    SSS_OK)
-		passes->facing = v;
-	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_PASS, &v) ==
-	    SSS_OK) {
-		passes->thickness = v;
-		return SSS_OK;
-	}
-	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, &v) !=
-	    SSS_OK)
-		return SSS_OK; /* sss_apply names the missing thickness */
-	int64_t stride = v.row_stride ? v.row_stride
-	                 : (int64_t)v.width * v.channels;
-	float *t = malloc((size_t)v.width * (size_t)v.height * sizeof *t);
-	if (!t)
-		return sss__fail(err, errlen, SSS_ERR_OUT_OF_MEMORY, "%s: out of "
-		                 "memory for the thickness pass", in);
-	/* The mean of t^2 over the samples: its root is the thickness; a
-	 * slightly negative value (filter noise) is 0, NaN stays NaN. */
-	for (int32_t y = 0; y < v.height; y++)
-		for (int32_t x = 0; x < v.width; x++) {
-			float sq = v.data[y * stride + (int64_t)x * v.channels];
-			t[(size_t)y * v.width + x] = sq > 0.0f ? sqrtf(sq)
-			                             : sq <= 0.0f ? 0.0f : sq;
-		}
-	*thick_buf = t;
-	passes->thickness = (sss_image){t, v.width, v.height, 1, 0};
-	return SSS_OK;
 }
 
 /* The caller's progress_fn, told which stage the EXR options' own
@@ -151,8 +88,8 @@ sss_result sss_process_exr(const char *in, const char *out,
 		                 "overwrite it", in);
 
 	sss_timings t = {0, 0, 0};
-	sss_exr *exr = NULL;
-	float *combined = NULL, *light = NULL, *thickness = NULL;
+	sss_frame *frame = NULL;
+	float *combined = NULL, *light = NULL;
 	sss_result r;
 	progress prog = {&opt, "read"};
 	opt.exr.progress_fn = opt.progress_fn ? stage_progress : NULL;
@@ -160,25 +97,11 @@ sss_result sss_process_exr(const char *in, const char *out,
 
 	tell(&prog, "read", 0.0);
 	double t0 = now();
-	if ((r = sss_exr_read(in, &opt.exr, &exr, err, errlen)))
+	if ((r = sss_frame_read(in, opt.layer, &opt.exr, &frame, err, errlen)))
 		goto done;
 	t.read = now() - t0;
 
-	sss_passes passes;
-	const char *layer = NULL;
-	if ((r = sss_exr_render_passes(exr, opt.layer, &passes, &layer, err,
-	                               errlen)))
-		goto done;
-	if (!has_usable_depth(&passes.depth)) {
-		r = sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
-		              "%s (layer '%s'): the Depth pass has no finite "
-		              "positive value (NaN-filled or empty)", in, layer);
-		goto done;
-	}
-	if ((r = back_light_passes(exr, layer, &passes, &thickness, in, err,
-	                           errlen)))
-		goto done;
-	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
+	int32_t w = sss_frame_width(frame), h = sss_frame_height(frame);
 	size_t n = (size_t)w * (size_t)h;
 	combined = malloc(n * 4 * sizeof *combined);
 	light = malloc(n * 3 * sizeof *light);
@@ -188,38 +111,18 @@ sss_result sss_process_exr(const char *in, const char *out,
 		goto done;
 	}
 
-	sss_options o = *sss_scene_options(scene);
-	if (opt.method >= 0)
-		o.method = opt.method;
-	if (opt.num_threads >= 0)
-		o.num_threads = opt.num_threads;
-	if (opt.samples >= 0)
-		o.samples = opt.samples;
-	o.radius_scale = o.radius_scale * opt.radius_scale;
-	int32_t count;
-	const sss_material *mats = sss_scene_materials(scene, &count);
 	sss_image oc = {combined, w, h, 4, 0}, ol = {light, w, h, 3, 0};
-	char detail[512];
+	sss_process_options scatter_opt = opt;
+	scatter_opt.progress_fn = NULL; /* told here, in order */
 	tell(&prog, "scatter", 0.0);
-	t0 = now();
-	r = sss__apply_report(&passes, sss_scene_camera(scene), mats, count, &o,
-	                      &oc, &ol, opt.chosen_methods, detail,
-	                      sizeof detail);
-	t.scatter = now() - t0;
-	if (r) {
-		sss__fail(err, errlen, r, "%s (layer '%s'): %s: %s", in, layer,
-		          sss_status_string(r), detail);
+	if ((r = sss_frame_scatter(frame, scene, &scatter_opt, &oc, &ol,
+	                           &t.scatter, err, errlen)))
 		goto done;
-	}
-
 	tell(&prog, "scatter", 1.0);
 	tell(&prog, "write", 0.0);
 	t0 = now();
-	if ((r = sss_exr_add_pass(exr, SSS_RESULT_LAYER, "Combined", "RGBA", combined, err,
-	                          errlen)) ||
-	    (r = sss_exr_add_pass(exr, SSS_RESULT_LAYER, "DiffLight", "RGB", light, err,
-	                          errlen)) ||
-	    (r = sss_exr_write(exr, out, &opt.exr, err, errlen)))
+	if ((r = sss_frame_write(frame, out, combined, light, &opt.exr, err,
+	                         errlen)))
 		goto done;
 	t.write = now() - t0;
 done:
@@ -227,7 +130,6 @@ done:
 		*timings = t;
 	free(combined);
 	free(light);
-	free(thickness);
-	sss_exr_free(exr);
+	sss_frame_free(frame);
 	return r;
 }

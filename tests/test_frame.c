@@ -1,0 +1,208 @@
+/* test_frame.c - a frame kept in memory (sss_frame.c): scattered again and
+ * again with other scene descriptions, it gives the same bits as the
+ * whole-file path (sss_process_exr) on the same passes, is not changed by
+ * a scatter, writes the same file, and refuses misuse with a status. */
+#include "test_util.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define INPUT "tests/data/blender_8x8.exr"
+#define SCENE "tests/data/blender_8x8.json"
+
+static char tmpdir[64];
+
+static void tpath(char *out, size_t len, const char *name)
+{
+	snprintf(out, len, "%s/%s", tmpdir, name);
+}
+
+/* The SSS layer's Combined pass of an EXR the library wrote, copied. */
+static float *result_of(const char *path, int32_t *w, int32_t *h)
+{
+	char err[512];
+	sss_exr *exr = NULL;
+	if (sss_exr_read(path, NULL, &exr, err, sizeof err) != SSS_OK) {
+		printf("cannot read %s: %s\n", path, err);
+		return NULL;
+	}
+	sss_image v;
+	float *copy = NULL;
+	if (sss_exr_find(exr, SSS_RESULT_LAYER, "Combined", &v) == SSS_OK &&
+	    v.channels == 4) {
+		size_t n = (size_t)v.width * (size_t)v.height * 4;
+		copy = malloc(n * sizeof *copy);
+		if (copy)
+			memcpy(copy, v.data, n * sizeof *copy);
+		*w = v.width;
+		*h = v.height;
+	}
+	sss_exr_free(exr);
+	return copy;
+}
+
+/* sss_process_exr's result with this radius scale, for comparison. */
+static float *processed(const sss_scene *scene, float radius_scale,
+                        const char *name, int32_t *w, int32_t *h)
+{
+	char err[512], out[128];
+	tpath(out, sizeof out, name);
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	opt.radius_scale = radius_scale;
+	sss_result r = sss_process_exr(INPUT, out, scene, &opt, NULL, err,
+	                               sizeof err);
+	CHECK("frame.process", r == SSS_OK, "%s", err);
+	return r == SSS_OK ? result_of(out, w, h) : NULL;
+}
+
+static int same_bits(const float *a, const float *b, size_t n)
+{
+	return a && b && memcmp(a, b, n * sizeof *a) == 0;
+}
+
+static void test_retune(void)
+{
+	char err[512], warn[512];
+	sss_scene *scene = NULL;
+	CHECK_STATUS("frame.scene", SSS_OK,
+	             sss_scene_load(SCENE, &scene, warn, sizeof warn, err,
+	                            sizeof err));
+	if (!scene)
+		return;
+	int32_t w = 0, h = 0;
+	float *want1 = processed(scene, 1.0f, "p1.exr", &w, &h);
+	float *want3 = processed(scene, 100.0f, "p3.exr", &w, &h);
+	CHECK("frame.radius-matters", want1 && want3 &&
+	      !same_bits(want1, want3, (size_t)w * h * 4),
+	      "a 100x radius gives the same image: the test cannot fail");
+
+	sss_frame *frame = NULL;
+	CHECK_STATUS("frame.read", SSS_OK,
+	             sss_frame_read(INPUT, NULL, NULL, &frame, err, sizeof err));
+	if (!frame || !want1 || !want3)
+		goto done;
+	CHECK("frame.size", sss_frame_width(frame) == w &&
+	      sss_frame_height(frame) == h, "%dx%d, file %dx%d",
+	      sss_frame_width(frame), sss_frame_height(frame), w, h);
+	CHECK("frame.layer", strcmp(sss_frame_layer(frame), "ViewLayer") == 0,
+	      "layer '%s'", sss_frame_layer(frame));
+	CHECK("frame.exr", sss_exr_width(sss_frame_exr(frame)) == w,
+	      "the frame's passes are not the file's");
+
+	size_t n = (size_t)w * (size_t)h;
+	float *combined = malloc(n * 4 * sizeof *combined);
+	float *light = malloc(n * 3 * sizeof *light);
+	sss_image oc = {combined, w, h, 4, 0}, ol = {light, w, h, 3, 0};
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	double seconds = -1.0;
+	/* 1x, 100x, then 1x again: each equals the whole-file path's bits, so
+	 * a scatter leaves the frame as it was. */
+	const float scales[3] = {1.0f, 100.0f, 1.0f};
+	const float *wants[3] = {want1, want3, want1};
+	for (int i = 0; i < 3; i++) {
+		opt.radius_scale = scales[i];
+		sss_result r = sss_frame_scatter(frame, scene, &opt, &oc, &ol,
+		                                 &seconds, err, sizeof err);
+		CHECK("frame.scatter", r == SSS_OK, "%s", err);
+		CHECK("frame.same-as-process", same_bits(combined, wants[i], n * 4),
+		      "scatter %d (radius x%g) differs from sss_process_exr's", i,
+		      (double)scales[i]);
+	}
+	CHECK("frame.seconds", seconds >= 0.0 && seconds < 60.0, "%g", seconds);
+
+	/* Written only when asked: the same pixels as the whole-file path. */
+	char out[128];
+	tpath(out, sizeof out, "written.exr");
+	CHECK_STATUS("frame.write", SSS_OK,
+	             sss_frame_write(frame, out, combined, light, NULL, err,
+	                             sizeof err));
+	int32_t w2 = 0, h2 = 0;
+	float *written = result_of(out, &w2, &h2);
+	CHECK("frame.write-pixels", w2 == w && h2 == h &&
+	      same_bits(written, want1, n * 4), "the written file differs");
+	free(written);
+	CHECK_STATUS("frame.write-input", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_write(frame, INPUT, combined, light, NULL, err,
+	                             sizeof err));
+	/* A scatter after a write still reads the render's own passes. */
+	opt.radius_scale = 100.0f;
+	CHECK_STATUS("frame.scatter-after-write", SSS_OK,
+	             sss_frame_scatter(frame, scene, &opt, &oc, &ol, NULL, err,
+	                               sizeof err));
+	CHECK("frame.after-write", same_bits(combined, want3, n * 4),
+	      "the written SSS layer leaked into the passes");
+
+	/* Misuse is a status with a message, never a crash. */
+	sss_image small = {combined, w - 1, h, 4, 0};
+	CHECK_STATUS("frame.bad-size", SSS_ERR_SIZE_MISMATCH,
+	             sss_frame_scatter(frame, scene, &opt, &small, NULL, NULL, err,
+	                               sizeof err));
+	CHECK("frame.bad-size-says", strstr(err, INPUT) != NULL, "%s", err);
+	opt.radius_scale = -1.0f;
+	CHECK_STATUS("frame.bad-scale", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_scatter(frame, scene, &opt, &oc, NULL, NULL, err,
+	                               sizeof err));
+	opt.radius_scale = 1.0f;
+	opt.struct_size = 3;
+	CHECK_STATUS("frame.bad-struct", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_scatter(frame, scene, &opt, &oc, NULL, NULL, err,
+	                               sizeof err));
+	CHECK_STATUS("frame.no-scene", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_scatter(frame, NULL, NULL, &oc, NULL, NULL, err,
+	                               sizeof err));
+	CHECK_STATUS("frame.no-frame", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_scatter(NULL, scene, NULL, &oc, NULL, NULL, err,
+	                               sizeof err));
+	CHECK_STATUS("frame.write-null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_write(frame, out, NULL, light, NULL, err,
+	                             sizeof err));
+	free(combined);
+	free(light);
+done:
+	sss_frame_free(frame);
+	free(want1);
+	free(want3);
+	sss_scene_free(scene);
+}
+
+static void test_read_errors(void)
+{
+	char err[512], path[128];
+	sss_frame *frame = (sss_frame *)&frame;
+	tpath(path, sizeof path, "absent.exr");
+	sss_result r = sss_frame_read(path, NULL, NULL, &frame, err, sizeof err);
+	CHECK("frame.missing", r != SSS_OK && frame == NULL &&
+	      strstr(err, path) != NULL, "%s: %s", sss_status_name(r), err);
+	CHECK_STATUS("frame.layer-missing", SSS_ERR_MISSING_PASS,
+	             sss_frame_read(INPUT, "NoSuchLayer", NULL, &frame, err,
+	                            sizeof err));
+	CHECK("frame.layer-missing-null", frame == NULL, "frame not NULL");
+	CHECK_STATUS("frame.no-out", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_read(INPUT, NULL, NULL, NULL, err, sizeof err));
+	CHECK_STATUS("frame.no-path", SSS_ERR_INVALID_ARGUMENT,
+	             sss_frame_read(NULL, NULL, NULL, &frame, err, sizeof err));
+	CHECK("frame.null-accessors", sss_frame_width(NULL) == 0 &&
+	      sss_frame_height(NULL) == 0 && sss_frame_layer(NULL) == NULL &&
+	      sss_frame_exr(NULL) == NULL, "accessors on NULL");
+	sss_frame_free(NULL);
+}
+
+int main(void)
+{
+	snprintf(tmpdir, sizeof tmpdir, "/tmp/sss_frame_XXXXXX");
+	if (!mkdtemp(tmpdir)) {
+		perror("mkdtemp");
+		return 1;
+	}
+	test_retune();
+	test_read_errors();
+	int rc = tu_finish("test_frame");
+	char cmd[128];
+	snprintf(cmd, sizeof cmd, "rm -rf %s", tmpdir);
+	if (system(cmd) != 0)
+		printf("could not remove %s\n", tmpdir);
+	return rc;
+}
