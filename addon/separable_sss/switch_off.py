@@ -135,25 +135,45 @@ def _switch_sss_node(tree, node, undo):
         _relink(tree, undo, diffuse.outputs[0], target)
 
 
+def pass_indices(analysis):
+    """The pass index each scattering material renders with, {material:
+    index}: its own when it has one that no other material uses, else a
+    free one. The one rule for the render, the description of its
+    result (also a live re-tune's, which changes nothing) and the Assign
+    Pass Indices operator. Another material's index is off limits, a
+    non-scattering one's too: its pixels would scatter with this
+    profile."""
+    scattering = {f.material for f in analysis.found}
+    taken = {m.pass_index for m in bpy.data.materials
+             if m not in scattering and m.pass_index}
+    next_index = max(taken | {m.pass_index for m in scattering} | {0}) + 1
+    used, out = set(), {}
+    for found in analysis.found:
+        mat = found.material
+        if mat in out:
+            continue
+        index = mat.pass_index
+        if not index or index in taken or index in used:
+            index = next_index
+            next_index += 1
+        used.add(index)
+        out[mat] = index
+    return out
+
+
+def assign_pass_indices(analysis):
+    """Sets every found material's pass index in the analysis (not on the
+    material) by pass_indices(); returns the mapping."""
+    indices = pass_indices(analysis)
+    for found in analysis.found:
+        found.pass_index = indices[found.material]
+    return indices
+
+
 def _free_pass_indices(scene, analysis, undo):
-    used = {m.pass_index for m in bpy.data.materials}
-    next_index = max(used | {0}) + 1
-    for found in analysis.found:
-        if found.material.pass_index == 0:
-            undo.set(found.material, "pass_index", next_index)
-            found.pass_index = next_index
-            next_index += 1
-        else:
-            found.pass_index = found.material.pass_index
-    # Two scattering materials sharing an index would share a profile.
-    seen = {}
-    for found in analysis.found:
-        if found.pass_index in seen and seen[found.pass_index] != \
-                found.material:
-            undo.set(found.material, "pass_index", next_index)
-            found.pass_index = next_index
-            next_index += 1
-        seen[found.pass_index] = found.material
+    for mat, index in assign_pass_indices(analysis).items():
+        if mat.pass_index != index:
+            undo.set(mat, "pass_index", index)
 
 
 def _enable_passes(scene, analysis, undo):

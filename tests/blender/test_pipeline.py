@@ -270,3 +270,24 @@ def test_render_sss_script(blends, tmp_path):
         assert (tmp_path / f"shot_{f:04d}_scene.json").exists()
         assert f"frame {f}:" in proc.stdout
     assert os.path.getmtime(blends["two"]) == mtime  # the .blend untouched
+
+
+def test_non_scattering_material_index_is_off_limits(blends, tmp_path):
+    """A render gives a scattering material another pass index when a
+    material that does not scatter uses its index (their pixels would
+    scatter with this profile), as Assign Pass Indices does; the material
+    keeps its own index after the render."""
+    scene = open_scene(blends["two"], tmp_path)
+    found = pipeline.analyse(scene).found
+    mat = found[0].material
+    mat.pass_index = 7
+    plain = bpy.data.materials.new("Plain")
+    plain.pass_index = 7
+    job = render(scene)
+    described = {m["name"]: m["pass_index"]
+                 for m in json.load(open(job.scene_json))["materials"]}
+    assert described[mat.name] != 7
+    assert len(set(described.values())) == len(described)
+    assert mat.pass_index == 7 and plain.pass_index == 7
+    assert bpy.ops.sss.assign_pass_indices() == {'FINISHED'}
+    assert mat.pass_index != 7 and plain.pass_index == 7
