@@ -17,18 +17,19 @@ if "bpy" in locals():
     import importlib
     for _m in (blender_compat, native, errors, analysis,  # noqa: F821
                lighting, description, transmission,  # noqa: F821
-               switch_off, nodes, pipeline, preferences,  # noqa: F821
+               switch_off, nodes, live, pipeline, preferences,  # noqa: F821
                properties, presets, operators, ui, render_flow):  # noqa: F821
         importlib.reload(_m)
 
 import bpy  # noqa: E402,F401
 
 from . import (analysis, blender_compat, description,  # noqa: E402
-               errors, lighting, native, nodes, operators, pipeline,
+               errors, lighting, live, native, nodes, operators, pipeline,
                preferences, presets, properties, render_flow, switch_off,
                transmission, ui)
 
-_modules = (preferences, properties, presets, operators, ui, render_flow)
+_modules = (preferences, properties, presets, operators, ui, render_flow,
+            live)
 
 
 def register():

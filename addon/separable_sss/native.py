@@ -8,7 +8,7 @@ import json
 import os
 import threading
 
-ABI_VERSION = 8  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 9  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -150,6 +150,24 @@ def _declare(lib):
                                          c.c_char_p, c.c_size_t]),
         "sss_exr_write": (c.c_int32, [c.c_void_p, c.c_char_p, c.c_void_p,
                                       c.c_char_p, c.c_size_t]),
+        "sss_frame_read": (c.c_int32, [c.c_char_p, c.c_char_p,
+                                       c.POINTER(ExrOptions),
+                                       c.POINTER(c.c_void_p), c.c_char_p,
+                                       c.c_size_t]),
+        "sss_frame_free": (None, [c.c_void_p]),
+        "sss_frame_width": (c.c_int32, [c.c_void_p]),
+        "sss_frame_height": (c.c_int32, [c.c_void_p]),
+        "sss_frame_layer": (c.c_char_p, [c.c_void_p]),
+        "sss_frame_scatter": (c.c_int32, [c.c_void_p, c.c_void_p,
+                                          c.POINTER(ProcessOptions),
+                                          c.POINTER(Image), c.POINTER(Image),
+                                          c.POINTER(c.c_double), c.c_char_p,
+                                          c.c_size_t]),
+        "sss_frame_write": (c.c_int32, [c.c_void_p, c.c_char_p,
+                                        c.c_void_p, c.c_void_p,
+                                        c.POINTER(ExrOptions), c.c_char_p,
+                                        c.c_size_t]),
+        "sss_exr_options_default": (None, [c.POINTER(ExrOptions)]),
         "sss_process_exr": (c.c_int32, [c.c_char_p, c.c_char_p, c.c_void_p,
                                         c.POINTER(ProcessOptions),
                                         c.POINTER(Timings), c.c_char_p,
@@ -299,13 +317,21 @@ def transmission_slab(material):
 class Scene:
     """A loaded scene description (JSON); use as a context manager."""
 
-    def __init__(self, path):
+    def __init__(self, path=None, *, text=None):
+        """From a file, or from JSON text (nothing read or written)."""
         lib = library()
         self._ptr = ctypes.c_void_p()
         warn = ctypes.create_string_buffer(4096)
         err = ctypes.create_string_buffer(4096)
-        code = lib.sss_scene_load(os.fsencode(path), ctypes.byref(self._ptr),
-                                  warn, len(warn), err, len(err))
+        if text is not None:
+            data = text.encode()
+            code = lib.sss_scene_parse(data, len(data),
+                                       ctypes.byref(self._ptr), warn,
+                                       len(warn), err, len(err))
+        else:
+            code = lib.sss_scene_load(os.fsencode(path),
+                                      ctypes.byref(self._ptr), warn,
+                                      len(warn), err, len(err))
         self.warnings = [w for w in warn.value.decode(errors="replace")
                          .splitlines() if w]
         _check(code, err)
@@ -321,13 +347,10 @@ class Scene:
     def __exit__(self, *exc):
         self.close()
 
-    def process(self, input_exr, output_exr, *, method=None,
-                radius_scale=1.0, threads=None, layer=None, samples=None,
-                progress=None):
-        """One frame through the library; returns the timings as a dict.
-        Releases the GIL for the duration (ctypes does). progress(stage,
-        done) is told where the frame is (sss_process_options), on the
-        calling thread."""
+    def options(self, *, method=None, radius_scale=1.0, threads=None,
+                layer=None, samples=None, progress=None):
+        """sss_process_options for a run with this scene, and what must
+        stay referenced while it runs: (options, chosen methods, keep)."""
         lib = library()
         opt = ProcessOptions()
         lib.sss_process_options_default(ctypes.byref(opt))
@@ -338,32 +361,144 @@ class Scene:
             opt.num_threads = threads
         if samples is not None:
             opt.samples = samples
+        keep = []
         if layer:
-            opt.layer = layer.encode()
+            keep.append(layer.encode())
+            opt.layer = keep[-1]
         if progress is not None:
             # Kept referenced for the call: the library holds the pointer.
-            callback = ProgressFn(lambda stage, done, _user: progress(
-                stage.decode(), done))
-            opt.progress_fn = callback
+            keep.append(ProgressFn(lambda stage, done, _user: progress(
+                stage.decode(), done)))
+            opt.progress_fn = keep[-1]
         count = ctypes.c_int32()
         lib.sss_scene_materials(self._ptr, ctypes.byref(count))
         chosen = (ctypes.c_int32 * max(count.value, 1))()
+        for i in range(count.value):
+            chosen[i] = -1
         opt.chosen_methods = chosen
+        return opt, chosen, keep
+
+    def chosen_methods(self, chosen):
+        """{material name: method name} for the materials that ran."""
+        lib = library()
+        count = ctypes.c_int32()
+        lib.sss_scene_materials(self._ptr, ctypes.byref(count))
+        names = dict(enumerate(name for name, _ in methods()))
+        return {(lib.sss_scene_material_name(self._ptr, i) or b"").decode(
+                    errors="replace") or f"material {i}": names[chosen[i]]
+                for i in range(count.value) if chosen[i] >= 0}
+
+    def process(self, input_exr, output_exr, *, method=None,
+                radius_scale=1.0, threads=None, layer=None, samples=None,
+                progress=None):
+        """One frame through the library; returns the timings as a dict.
+        Releases the GIL for the duration (ctypes does). progress(stage,
+        done) is told where the frame is (sss_process_options), on the
+        calling thread."""
+        opt, chosen, _keep = self.options(
+            method=method, radius_scale=radius_scale, threads=threads,
+            layer=layer, samples=samples, progress=progress)
         timings = Timings()
         err = ctypes.create_string_buffer(4096)
-        code = lib.sss_process_exr(os.fsencode(input_exr),
-                                   os.fsencode(output_exr), self._ptr,
-                                   ctypes.byref(opt), ctypes.byref(timings),
-                                   err, len(err))
+        code = library().sss_process_exr(
+            os.fsencode(input_exr), os.fsencode(output_exr), self._ptr,
+            ctypes.byref(opt), ctypes.byref(timings), err, len(err))
         _check(code, err)
-        names = dict(enumerate(name for name, _ in methods()))
         return {"read": timings.read, "scatter": timings.scatter,
                 "write": timings.write,
-                "methods": {
-                    (lib.sss_scene_material_name(self._ptr, i) or b"").decode(
-                        errors="replace") or f"material {i}":
-                    names[chosen[i]]
-                    for i in range(count.value) if chosen[i] >= 0}}
+                "methods": self.chosen_methods(chosen)}
+
+
+# sss_exr_options.progress_fn: (share done, user)
+ExrProgressFn = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_void_p)
+
+
+def _exr_options(progress, keep):
+    """sss_exr_options with the defaults and, when given, progress(done)."""
+    opt = ExrOptions()
+    library().sss_exr_options_default(ctypes.byref(opt))
+    if progress is not None:
+        keep.append(ExrProgressFn(lambda done, _user: progress(done)))
+        opt.progress_fn = ctypes.cast(keep[-1], ctypes.c_void_p)
+    return opt
+
+
+def _float_view(array, channels):
+    """An sss_image over a C-contiguous float32 numpy array (h, w, c)."""
+    h, w = array.shape[:2]
+    return Image(array.ctypes.data_as(ctypes.POINTER(ctypes.c_float)), w, h,
+                 channels, 0)
+
+
+class Frame:
+    """One EXR frame's passes, read once and kept decoded in the library
+    (sss_frame): scattered again with any scene description, into numpy
+    arrays, with no file read or written; use as a context manager or
+    close() it. Reading, writing and closing must not overlap another
+    call on the same frame."""
+
+    def __init__(self, path, layer=None, progress=None):
+        """progress(done): the share of the file read (0..1)."""
+        lib = library()
+        self._ptr = ctypes.c_void_p()
+        keep = []
+        opt = _exr_options(progress, keep)
+        err = ctypes.create_string_buffer(4096)
+        _check(lib.sss_frame_read(os.fsencode(path),
+                                  layer.encode() if layer else None,
+                                  ctypes.byref(opt), ctypes.byref(self._ptr),
+                                  err, len(err)), err)
+        self.path = path
+        self.width = lib.sss_frame_width(self._ptr)
+        self.height = lib.sss_frame_height(self._ptr)
+        self.layer = lib.sss_frame_layer(self._ptr).decode(errors="replace")
+
+    def close(self):
+        if self._ptr:
+            library().sss_frame_free(self._ptr)
+            self._ptr = ctypes.c_void_p()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        with contextlib.suppress(Exception):
+            self.close()
+
+    def scatter(self, scene, combined, light=None, *, method=None,
+                radius_scale=1.0, threads=None, samples=None,
+                progress=None):
+        """Scatters into combined (float32 numpy, height x width x 4,
+        rows top first as in the file) and light (x 3, optional); returns
+        {"scatter": seconds, "methods": {material: method}}. Releases
+        the GIL for the duration."""
+        if not self._ptr:
+            raise LibraryError(-1, "CLOSED", f"{self.path}: frame closed")
+        opt, chosen, _keep = scene.options(
+            method=method, radius_scale=radius_scale, threads=threads,
+            samples=samples, progress=progress)
+        out_c = _float_view(combined, 4)
+        out_l = _float_view(light, 3) if light is not None else None
+        seconds = ctypes.c_double()
+        err = ctypes.create_string_buffer(4096)
+        _check(library().sss_frame_scatter(
+            self._ptr, scene._ptr, ctypes.byref(opt), ctypes.byref(out_c),
+            ctypes.byref(out_l) if out_l is not None else None,
+            ctypes.byref(seconds), err, len(err)), err)
+        return {"scatter": seconds.value,
+                "methods": scene.chosen_methods(chosen)}
+
+    def write(self, path, combined, light, progress=None):
+        """The frame's file with the SSS layer, written atomically."""
+        keep = []
+        opt = _exr_options(progress, keep)
+        err = ctypes.create_string_buffer(4096)
+        _check(library().sss_frame_write(
+            self._ptr, os.fsencode(path), combined.ctypes.data,
+            light.ctypes.data, ctypes.byref(opt), err, len(err)), err)
 
 
 class Exr:

@@ -12,8 +12,8 @@ import bpy
 from bpy.app.handlers import persistent
 from bpy.props import BoolProperty
 
-from . import nodes, pipeline, render_flow
-from .switch_off import REQUIRED_PASSES
+from . import live, nodes, pipeline, render_flow
+from .switch_off import REQUIRED_PASSES, pass_indices
 
 # Only one run at a time: its worker thread, alive while the library runs
 # (also after an Esc, until the library returns).
@@ -294,6 +294,35 @@ class SSS_OT_apply(_SSSRunBase, bpy.types.Operator):
     def prepare(self, context):
         return pipeline.prepare_last_render(context)
 
+    def _retune(self, context):
+        """With the render's passes kept (live.py), scatters them again
+        with the current settings, in memory; None when none are kept."""
+        scene = context.scene
+        entry = live.kept(scene)
+        layer = context.view_layer
+        if entry is None or (layer is not None and
+                             entry.view_layer != layer.name):
+            return None
+        try:
+            timings = live.retune(scene, force=True)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        methods = ", ".join(f"{name}: {m}" for name, m in
+                            sorted(timings.get("methods", {}).items()))
+        self.report({'INFO'}, "SSS re-tuned from the render's kept passes "
+                    "(SSS %.2f s, in all %.2f s%s)" % (
+                        timings["scatter"], timings["total"],
+                        "; " + methods if methods else ""))
+        _redraw(context)
+        return {'FINISHED'}
+
+    def execute(self, context):
+        return self._retune(context) or super().execute(context)
+
+    def invoke(self, context, event):
+        return self._retune(context) or super().invoke(context, event)
+
 
 class SSS_OT_remove_setup(bpy.types.Operator):
     """Remove the SSS nodes from the compositor; the Render Layers image
@@ -338,32 +367,18 @@ class SSS_OT_assign_pass_indices(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            found = pipeline.analyse(context.scene).found
+            found = pipeline.analyse(context.scene)
         except Exception as ex:
             self.report({'ERROR'}, _one_line(ex))
             return {'CANCELLED'}
-        if not found:
+        if not found.found:
             self.report({'WARNING'}, "No material scatters")
             return {'CANCELLED'}
-        scattering = {f.material for f in found}
-        # Indices of other materials are off limits: their pixels would
-        # scatter with this profile.
-        taken = {m.pass_index for m in bpy.data.materials
-                 if m not in scattering and m.pass_index}
-        used = set()
         changed = []
-        next_index = max(taken | {m.pass_index for m in scattering} |
-                         {0}) + 1
-        for f in found:
-            mat = f.material
-            if mat.pass_index and mat.pass_index not in taken and \
-                    mat.pass_index not in used:
-                used.add(mat.pass_index)
-                continue
-            mat.pass_index = next_index
-            used.add(next_index)
-            changed.append("%s: %d" % (mat.name, next_index))
-            next_index += 1
+        for mat, index in pass_indices(found).items():
+            if mat.pass_index != index:
+                mat.pass_index = index
+                changed.append("%s: %d" % (mat.name, index))
         if changed:
             self.report({'INFO'}, "Pass indices: " + ", ".join(changed))
         else:

@@ -8,11 +8,13 @@ import math
 import os
 import re
 import tempfile
+import time
 from dataclasses import dataclass, field
 
 import bpy
+import numpy as np
 
-from . import analysis, native, nodes, preferences, transmission
+from . import analysis, live, native, nodes, preferences, transmission
 from . import blender_compat as compat
 from .analysis import Analysis, Found, analyse  # noqa: F401
 from .description import (library_material, scene_description,  # noqa: F401
@@ -30,6 +32,9 @@ class Job:
     radius_scale: float = 1.0  # times the description's own
     timings: dict = field(default_factory=dict)
     summary: str = ""
+    # What scatter() read and made, kept by finish() for live re-tunes.
+    frame: object = None            # native.Frame
+    combined: object = None         # numpy height x width x 4
 
 
 def output_path(scene):
@@ -150,19 +155,45 @@ def prepare_last_render(context):
 
 
 def scatter(job, progress=None):
-    """Runs the library on the job's files. No bpy: thread-safe.
-    progress(stage, done): where the frame is (native.Scene.process)."""
+    """Runs the library on the job's files: reads the passes (kept in
+    job.frame for live re-tunes), scatters them and writes the result.
+    No bpy: thread-safe. progress(stage, done): where the frame is
+    ("read", "scatter", "write", each from 0 to 1)."""
+    def told(stage):
+        if progress is None:
+            return None
+        return lambda done: progress(stage, done)
+
+    timings = {}
+    frame = None
     try:
         with native.Scene(job.scene_json) as scene:
             radius_scale = job.radius_scale
             if os.environ.get("SSS_TEST_FAIL") == "library":
                 radius_scale = -1.0  # the library refuses it: a real error
-            job.timings = scene.process(job.input_exr, job.output_exr,
-                                        radius_scale=radius_scale,
-                                        layer=job.layer or None,
-                                        progress=progress)
+            if progress is not None:
+                progress("read", 0.0)
+            started = time.perf_counter()
+            frame = native.Frame(job.input_exr, job.layer or None,
+                                 progress=told("read"))
+            timings["read"] = time.perf_counter() - started
+            combined = np.empty((frame.height, frame.width, 4), np.float32)
+            light = np.empty((frame.height, frame.width, 3), np.float32)
+            timings.update(frame.scatter(scene, combined, light,
+                                         radius_scale=radius_scale,
+                                         progress=progress))
+            if progress is not None:
+                progress("write", 0.0)
+            started = time.perf_counter()
+            frame.write(job.output_exr, combined, light,
+                        progress=told("write"))
+            timings["write"] = time.perf_counter() - started
     except native.LibraryError as e:
+        if frame is not None:
+            frame.close()
         raise SSSError(str(e)) from None
+    job.timings = timings
+    job.frame, job.combined = frame, combined
     return job
 
 
@@ -178,6 +209,9 @@ def finish(context, job):
         image.name = name
     context.scene.sss.last_result = job.output_exr
     nodes.ensure_setup(context.scene, image)
+    if job.frame is not None:
+        live.keep(context.scene, job.layer, job.frame, job.combined)
+        job.frame = job.combined = None
     return image
 
 

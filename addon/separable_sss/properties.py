@@ -213,6 +213,12 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
         name="Back-Light Samples", min=0, max=65536, default=0,
         description="Samples of the back-light layer (its light is "
         "blurred, so few do); 0: a quarter of the scene's, at least 4")
+    live: BoolProperty(
+        name="Live Re-tune",
+        description="After Render with SSS or Apply, keep the render's "
+                    "passes in memory and scatter them again whenever an "
+                    "SSS setting of the scene or a material changes",
+        default=True)
     last_result: StringProperty(name="Last Result", subtype="FILE_PATH",
                                 default="")
 

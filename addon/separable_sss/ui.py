@@ -9,7 +9,7 @@ import textwrap
 
 import bpy
 
-from . import nodes, pipeline, transmission
+from . import live, nodes, pipeline, transmission
 from .presets import SSS_MT_material_presets
 from .properties import method_items
 
@@ -231,6 +231,27 @@ def _scene_problem(scene):
     return None
 
 
+def _draw_live(layout, context, scene):
+    """Live Re-tune: whether the render's passes are kept, and the last
+    re-tune's time or error."""
+    entry = live.kept(scene)
+    row = layout.row()
+    row.prop(scene.sss, "live")
+    if entry is None:
+        row.label(text="(after Render with SSS)")
+        return
+    error = live.last_error.get(scene.name)
+    if error:
+        _wrapped(layout, context, "Live re-tune failed: " + error, 'ERROR')
+    elif entry.timings:
+        row.label(text="%dx%d, %.2f s" % (entry.frame.width,
+                                          entry.frame.height,
+                                          entry.timings.get("total", 0.0)))
+    else:
+        row.label(text="%dx%d kept" % (entry.frame.width,
+                                       entry.frame.height))
+
+
 class SSS_PT_node_main(_SidebarPanel, bpy.types.Panel):
     bl_label = "Screen-Space SSS"
 
@@ -254,6 +275,7 @@ class SSS_PT_node_main(_SidebarPanel, bpy.types.Panel):
         problem = _scene_problem(scene)
         if problem:
             _wrapped(layout, context, problem, 'ERROR')
+        _draw_live(layout, context, scene)
 
         col = layout.column()
         col.prop(s, "enabled")

@@ -1,0 +1,169 @@
+"""Re-tuning SSS after the render, live (live.py): after Render with SSS the
+passes stay decoded in the library; a change of a material's radius
+followed by Apply scatters them again in memory, pushes the pixels into the
+compositor's image, writes no file, and equals the `sss` command on the
+same passes and description."""
+import os
+import subprocess
+import time
+
+import bpy
+import numpy as np
+import pytest
+
+from helpers import BUILD, build_blend, compat, load_addon
+
+separable_sss = load_addon()
+from separable_sss import live, nodes, pipeline  # noqa: E402
+
+from exr import read_channels  # noqa: E402
+
+
+@pytest.fixture(scope="module", autouse=True)
+def addon():
+    separable_sss.register()
+    yield
+    separable_sss.unregister()
+
+
+@pytest.fixture(scope="module")
+def blend(tmp_path_factory):
+    d = tmp_path_factory.mktemp("blends")
+    return build_blend("two", str(d / "two.blend"))
+
+
+def open_rendered(blend, out_dir):
+    """The scene rendered with SSS through the operator, as an artist does."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(out_dir)
+    assert bpy.ops.sss.render() == {'FINISHED'}
+    return scene
+
+
+def principled(scene):
+    """The first scattering material's Principled BSDF."""
+    found = pipeline.analyse(scene).found
+    assert found, "the test scene has no scattering material"
+    return found[0].node
+
+
+def scale_radius(scene, factor):
+    sock = compat.radius_factor_input(principled(scene))
+    sock.default_value = sock.default_value * factor
+
+
+def shown_pixels(scene):
+    """The pixels of the image the SSS Result node shows, rows top first."""
+    image = nodes.find_result(scene).image
+    w, h = image.size
+    px = np.empty(w * h * 4, np.float32)
+    image.pixels.foreach_get(px)
+    return image, px.reshape(h, w, 4)[::-1]
+
+
+def files(folder):
+    return {name: os.stat(os.path.join(folder, name)).st_mtime_ns
+            for name in os.listdir(folder)}
+
+
+def test_render_keeps_the_passes(blend, tmp_path):
+    scene = open_rendered(blend, tmp_path)
+    entry = live.kept(scene)
+    assert entry is not None
+    assert (entry.frame.width, entry.frame.height) == \
+        (scene.render.resolution_x * scene.render.resolution_percentage // 100,
+         scene.render.resolution_y * scene.render.resolution_percentage // 100)
+    assert entry.view_layer == bpy.context.view_layer.name
+    # Nothing changed since the render: nothing to scatter.
+    assert live.retune(scene) == {}
+
+
+def test_retune_in_memory_equals_the_command(blend, tmp_path):
+    scene = open_rendered(blend, tmp_path)
+    first = live.kept(scene).combined.copy()
+    before = files(tmp_path)
+    scale_radius(scene, 4.0)
+    assert bpy.ops.sss.apply() == {'FINISHED'}
+    assert files(tmp_path) == before, "a re-tune wrote or changed a file"
+
+    image, shown = shown_pixels(scene)
+    assert image.name == live.image_name(scene)
+    assert image.source == 'GENERATED' and image.is_float
+    assert not np.allclose(shown, first, atol=1e-4), \
+        "a 4x radius left the image as it was"
+
+    # The `sss` command on the same passes and description.
+    desc = tmp_path / "live.json"
+    desc.write_text(live.description_text(scene))
+    passes = pipeline.paths_for(scene, scene.frame_current)[0]
+    out = str(tmp_path / "cli.exr")
+    proc = subprocess.run([os.path.join(BUILD, "sss"), passes, "-o", out,
+                           "--scene", str(desc), "-q"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    ch, _ = read_channels(out)
+    want = np.stack([ch[f"SSS.Combined.{c}"] for c in "RGBA"], -1)
+    assert np.abs(shown - want).max() <= 1e-5
+
+
+def test_depsgraph_change_retunes_once_settled(blend, tmp_path):
+    """A change seen by Blender's depsgraph is scattered once settings
+    settle (the timer's work, run here by hand: headless Blender runs no
+    timers); with Live Re-tune off nothing is scheduled."""
+    scene = open_rendered(blend, tmp_path)
+    live._pending.clear()
+    scale_radius(scene, 3.0)
+    bpy.context.view_layer.update()
+    assert scene.name in live._pending
+    time.sleep(live.SETTLE_SECONDS * 1.5)
+    assert live._settled() is None
+    assert live.kept(scene).timings.get("scatter", -1.0) >= 0.0
+    assert live.retune(scene) == {}   # already done
+
+    scene.sss.live = False
+    live._pending.clear()
+    scale_radius(scene, 2.0)
+    bpy.context.view_layer.update()
+    assert scene.name not in live._pending
+
+
+def test_scene_settings_retune_too(blend, tmp_path):
+    """The scene's method and radius scale are part of a re-tune."""
+    scene = open_rendered(blend, tmp_path)
+    scene.sss.method = 'SEPARABLE'
+    timings = live.retune(scene)
+    assert timings["scatter"] >= 0.0
+    assert set(timings["methods"].values()) == {"separable"}
+    scene.sss.radius_scale = 0.0
+    live.retune(scene)
+    _, shown = shown_pixels(scene)
+    entry = live.kept(scene)
+    assert np.array_equal(shown, entry.combined)
+
+
+def test_passes_freed_with_the_file_and_another_render(blend, tmp_path):
+    scene = open_rendered(blend, tmp_path)
+    frame = live.kept(scene).frame
+    bpy.ops.render.render()
+    assert live.kept(scene) is None and not frame._ptr
+    scene = open_rendered(blend, tmp_path)
+    frame = live.kept(scene).frame
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    assert live.kept(bpy.context.scene) is None and not frame._ptr
+
+
+def test_apply_without_kept_passes_reads_the_render(blend, tmp_path):
+    """Apply after a plain render (nothing kept) takes the file path and
+    then keeps the passes too."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(tmp_path)
+    for layer in scene.view_layers:
+        for name in ("diffuse_direct", "diffuse_indirect", "diffuse_color",
+                     "z", "material_index"):
+            setattr(layer, "use_pass_" + name, True)
+    bpy.ops.render.render()
+    assert live.kept(scene) is None
+    assert bpy.ops.sss.apply() == {'FINISHED'}
+    assert live.kept(scene) is not None
