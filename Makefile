@@ -212,7 +212,12 @@ $(BUILD)/sss-bench: bench/sss_bench.c tests/synth.h $(BUILD)/libsss.so
 	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \
 		bench/sss_bench.c -L$(BUILD) -lsss -Wl,-rpath,'$$ORIGIN' $(LDLIBS)
 
-bench: deps all $(BUILD)/sss-bench
+# A live re-tune's scatter on a real frame: one frame read, scattered again.
+$(BUILD)/sss-retune: bench/sss_retune.c $(BUILD)/libsss.so
+	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -o $@ \
+		bench/sss_retune.c -L$(BUILD) -lsss -Wl,-rpath,'$$ORIGIN' $(LDLIBS)
+
+bench: deps all $(BUILD)/sss-bench $(BUILD)/sss-retune
 	@$(PYTHON) bench/run_bench.py --out out/bench --build $(BUILD)
 
 # Separable against reference for Burley at three radii, with timings.

@@ -278,9 +278,15 @@ class SSS_OT_apply(_SSSRunBase, bpy.types.Operator):
             cls.poll_message_set("There is no render yet: render first, "
                                  "or use Render with SSS")
             return False
+        # The passes of a render with SSS are kept: a re-tune needs no
+        # more (the render with the switch on rendered them on a copy).
+        layer = context.view_layer
+        entry = live.kept(context.scene)
+        if entry is not None and layer is not None and \
+                entry.view_layer == layer.name:
+            return True
         # Unknown (a render before the add-on was on): tried, and the
         # library names what is missing.
-        layer = context.view_layer
         missing = _last_render_missing.get(context.scene.name, {}).get(
             layer.name if layer is not None else "")
         if missing:

@@ -40,7 +40,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import blender_compat as compat
-from . import native, nodes, pipeline, transmission
+from . import live, native, nodes, pipeline, transmission
 from .switch_off import TAG, _Undo, switched_off
 
 # The render in progress, per scene name (handlers get nothing else).
@@ -80,6 +80,10 @@ class Flow:
         self.failed = False
         self.render_layers = []
         self.denoise = False
+        # The last frame's decoded passes and result for the view layer
+        # the compositor shows first: kept for live re-tunes (live.py)
+        # when the render completes.
+        self.kept = None
 
     # -- files
     def passes_path(self, frame):
@@ -264,6 +268,8 @@ class Flow:
                 pipeline.scatter(job)
             except pipeline.SSSError as e:
                 raise pipeline.SSSError(f"frame {frame}: {e}") from None
+            if layer == self.layers[0]:
+                self.keep(layer, job)
             _say(scene, f"frame {frame}, view layer {layer}: "
                  f"{pipeline.timings_text(job)}")
         os.remove(passes)
@@ -275,6 +281,13 @@ class Flow:
             for layer in self.layers:
                 _remove(self.result_path(layer, old))
         self.done = {frame} | keep
+
+    def keep(self, layer, job):
+        """Holds the frame's passes for live re-tunes, freeing the last."""
+        if self.kept is not None:
+            self.kept[1].close()
+        self.kept = (layer, job.frame, job.combined)
+        job.frame = job.combined = None
 
     def write_passes(self, frame):
         """A multilayer EXR output holds only the composite after a
@@ -305,7 +318,16 @@ class Flow:
             image.filepath = os.path.join(self.folder, "failed_####.exr")
 
     # -- tear-down
-    def close(self):
+    def close(self, completed=False):
+        """Puts the compositor back; after a completed render the last
+        frame's passes stay decoded for live re-tunes."""
+        if self.kept is not None:
+            layer, frame, combined = self.kept
+            self.kept = None
+            if completed and not self.failed:
+                live.keep(self.scene, layer, frame, combined)
+            else:
+                frame.close()
         errors = self.tree_undo.run()
         for image in self.images.values():
             try:
@@ -454,16 +476,25 @@ def on_write(scene, *_):
         _step(scene, lambda flow: flow.write_passes(scene.frame_current))
 
 
-@persistent
-def on_end(scene, *_):
+def _end(scene, completed):
     undo = _unhooked.pop(scene.name, None)
     if undo is not None:
         undo.run()
     flow = _flows.pop(scene.name, None)
     if flow is not None:
-        flow.close()
+        flow.close(completed)
         if not bpy.app.background:
             bpy.app.timers.register(remove_leftovers, first_interval=0.1)
+
+
+@persistent
+def on_complete(scene, *_):
+    _end(scene, True)
+
+
+@persistent
+def on_cancel(scene, *_):
+    _end(scene, False)
 
 
 @persistent
@@ -488,8 +519,8 @@ def on_load(*_):
 HANDLERS = ((bpy.app.handlers.render_init, on_init),
             (bpy.app.handlers.render_pre, on_pre),
             (bpy.app.handlers.render_write, on_write),
-            (bpy.app.handlers.render_complete, on_end),
-            (bpy.app.handlers.render_cancel, on_end),
+            (bpy.app.handlers.render_complete, on_complete),
+            (bpy.app.handlers.render_cancel, on_cancel),
             (bpy.app.handlers.save_pre, remove_leftovers),
             (bpy.app.handlers.load_pre, on_load))
 

@@ -167,3 +167,21 @@ def test_apply_without_kept_passes_reads_the_render(blend, tmp_path):
     assert live.kept(scene) is None
     assert bpy.ops.sss.apply() == {'FINISHED'}
     assert live.kept(scene) is not None
+
+
+def test_render_with_the_switch_keeps_the_passes(blend, tmp_path):
+    """A render with the scene's Screen-space SSS on (F12, -f) keeps its
+    passes too; Apply then re-tunes them in memory."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    scene.sss.output_dir = str(tmp_path)
+    scene.sss.enabled = True
+    assert bpy.ops.render.render() == {'FINISHED'}
+    entry = live.kept(scene)
+    assert entry is not None and entry.view_layer == \
+        bpy.context.view_layer.name
+    scale_radius(scene, 3.0)
+    assert bpy.ops.sss.apply() == {'FINISHED'}
+    assert live.kept(scene).timings["scatter"] >= 0.0
+    image, _ = shown_pixels(scene)
+    assert image.name == live.image_name(scene)
