@@ -1,6 +1,8 @@
 """Re-tune SSS after the render, live. The passes of the last render with
-SSS (Render with SSS, Apply SSS to Last Render) stay decoded in the library
-(native.Frame), per scene; a change of any SSS setting of the scene or of a
+SSS (Render with SSS, Apply SSS to Last Render, F12 or -f with the scene's
+switch on), or of a multilayer EXR on a compositor Image node (a farm's
+render: Scatter Image Node), stay decoded in the library (native.Frame),
+per scene; a change of any SSS setting of the scene or of a
 scattering material (Principled's Subsurface Weight, Radius, Scale, Base
 Color; our own profile fields) scatters them again with the new scene
 description, in memory, and pushes the pixels into an image that the
@@ -11,6 +13,7 @@ slider being dragged scatters when it pauses); undo and redo scatter again
 for the restored settings. The passes are freed when the scene, the file
 or the render goes away (another render of the scene, loading a file)."""
 import json
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -20,7 +23,7 @@ from bpy.app.handlers import persistent
 
 from . import native, nodes
 from .analysis import analyse
-from .description import scene_description
+from .description import method_name, scene_description
 from .errors import SSSError
 from .switch_off import assign_pass_indices
 
@@ -37,6 +40,10 @@ class Kept:
     combined: np.ndarray            # height x width x 4, rows top first
     description: str = ""           # the JSON it was last scattered with
     timings: dict = field(default_factory=dict)
+    # A scene description read from a file (a farm's, beside its EXR):
+    # re-tunes take its camera and materials with the open scene's method
+    # and radius scale; None: the open scene's own description.
+    fixed: dict = None
 
 
 _kept = {}        # scene name -> Kept
@@ -76,12 +83,80 @@ def description_text(scene):
     return json.dumps(scene_description(scene, found), sort_keys=True)
 
 
-def keep(scene, view_layer, frame, combined):
-    """Keeps a frame read for a render with SSS (pipeline.scatter) and its
-    result, replacing what the scene held."""
+def _entry_text(scene, entry):
+    """What a re-tune of the entry scatters with."""
+    if entry.fixed is None:
+        return description_text(scene)
+    desc = dict(entry.fixed)
+    desc["radius_scale"] = float(entry.fixed.get("radius_scale", 1.0)) * \
+        scene.sss.radius_scale
+    desc["method"] = method_name(scene.sss.method)
+    return json.dumps(desc, sort_keys=True)
+
+
+def keep(scene, view_layer, frame, combined, fixed=None):
+    """Keeps a frame read for a render with SSS (pipeline.scatter) or from
+    a file, and its result (None: to be scattered), replacing what the
+    scene held."""
     drop(scene.name)
-    _kept[scene.name] = Kept(frame, view_layer, combined,
-                             description_text(scene))
+    scattered = combined is not None
+    if not scattered:
+        combined = np.zeros((frame.height, frame.width, 4), np.float32)
+    entry = Kept(frame, view_layer, combined, fixed=fixed)
+    if scattered and fixed is None:
+        entry.description = description_text(scene)
+    _kept[scene.name] = entry
+    return entry
+
+
+def description_beside(path):
+    """The scene description a farm (or the add-on) wrote beside an EXR:
+    NAME_scene.json for NAME_passes.exr, else NAME.json; None if none."""
+    stem = os.path.splitext(path)[0]
+    names = [stem + ".json"]
+    if stem.endswith("_passes"):
+        names.insert(0, stem[:-len("_passes")] + "_scene.json")
+    for name in names:
+        if os.path.isfile(name):
+            return name
+    return None
+
+
+def keep_file(scene, path, layer=None):
+    """Reads a multilayer EXR's passes (a farm's render) for live
+    re-tunes, with the description beside it (description_beside) or,
+    without one, the open scene's camera and materials; scatters and
+    shows it. Returns (entry, description path or None). Raises
+    SSSError."""
+    desc_path = description_beside(path)
+    fixed = None
+    if desc_path is not None:
+        try:
+            with open(desc_path, encoding="utf-8") as f:
+                fixed = json.load(f)
+        except (OSError, ValueError) as e:
+            raise SSSError(f"{desc_path}: {e}") from None
+        if not isinstance(fixed, dict):
+            raise SSSError(f"{desc_path}: not a scene description")
+    elif scene.camera is None:
+        raise SSSError(f"{os.path.basename(path)} has no scene description "
+                       "beside it and the scene has no camera to describe")
+    try:
+        frame = native.Frame(path, layer)
+    except native.LibraryError as e:
+        if layer is None or e.name != "SSS_ERR_MISSING_PASS":
+            raise SSSError(str(e)) from None
+        try:    # the node's layer has no passes: the file's first that has
+            frame = native.Frame(path, None)
+        except native.LibraryError as e2:
+            raise SSSError(str(e2)) from None
+    entry = keep(scene, frame.layer, frame, None, fixed)
+    try:
+        retune(scene, force=True)
+    except SSSError:
+        drop(scene.name)
+        raise
+    return entry, desc_path
 
 
 def _push(scene, combined):
@@ -122,7 +197,7 @@ def retune(scene, force=False):
     if entry is None:
         return None
     started = time.perf_counter()
-    text = description_text(scene)
+    text = _entry_text(scene, entry)
     if text == entry.description and not force:
         return {}
     try:

@@ -198,3 +198,17 @@ def remove_setup(scene):
             and not composite.is_linked):
         tree.links.new(render_layers.outputs["Image"], composite)
     return len(ours)
+
+
+def image_node_file(node):
+    """The multilayer EXR file a compositor Image node shows (this frame's
+    for a sequence), or None."""
+    if node is None or node.bl_idname != "CompositorNodeImage" or \
+            node.image is None or node.image.type != 'MULTILAYER':
+        return None
+    image = node.image
+    try:
+        path = image.filepath_from_user(image_user=node.image_user)
+    except (AttributeError, TypeError):
+        path = image.filepath
+    return bpy.path.abspath(path, library=image.library) or None

@@ -12,6 +12,7 @@ import bpy
 from bpy.app.handlers import persistent
 from bpy.props import BoolProperty
 
+from . import blender_compat as compat
 from . import live, nodes, pipeline, render_flow
 from .switch_off import REQUIRED_PASSES, pass_indices
 
@@ -393,6 +394,48 @@ class SSS_OT_assign_pass_indices(bpy.types.Operator):
         return {'FINISHED'}
 
 
+class SSS_OT_scatter_image(bpy.types.Operator):
+    """Scatter the passes of the multilayer EXR on the active Image node (a
+    farm's render) with the scene description beside it, or the scene's
+    camera and materials, and keep them for live re-tunes"""
+    bl_idname = "sss.scatter_image"
+    bl_label = "Scatter Image Node"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    @classmethod
+    def poll(cls, context):
+        scene = context.scene
+        if scene is None or getattr(scene, "sss", None) is None:
+            cls.poll_message_set("No scene")
+            return False
+        tree = compat.compositor_tree(scene)
+        node = tree.nodes.active if tree is not None else None
+        if nodes.image_node_file(node) is None:
+            cls.poll_message_set("Make an Image node with a multilayer EXR "
+                                 "of render passes the active node")
+            return False
+        return True
+
+    def execute(self, context):
+        scene = context.scene
+        node = compat.compositor_tree(scene).nodes.active
+        path = nodes.image_node_file(node)
+        layer = getattr(node, "layer", "") or None
+        try:
+            entry, desc = live.keep_file(scene, path, layer)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        self.report({'INFO'}, "SSS: %s (layer %s) scattered with %s in "
+                    "%.2f s; kept for live re-tunes" % (
+                        bpy.path.basename(path), entry.frame.layer,
+                        bpy.path.basename(desc) if desc else
+                        "the scene's camera and materials",
+                        entry.timings.get("total", 0.0)))
+        _redraw(context)
+        return {'FINISHED'}
+
+
 class SSS_OT_render_frame(bpy.types.Operator):
     """Render the active scene (F12; Ctrl F12: the animation). With the
     scene's Screen-space SSS on, the render runs in the foreground so that
@@ -423,7 +466,8 @@ class SSS_OT_render_frame(bpy.types.Operator):
 
 
 classes = (SSS_OT_render, SSS_OT_apply, SSS_OT_remove_setup,
-           SSS_OT_assign_pass_indices, SSS_OT_render_frame)
+           SSS_OT_assign_pass_indices, SSS_OT_scatter_image,
+           SSS_OT_render_frame)
 
 _register_classes, _unregister_classes = \
     bpy.utils.register_classes_factory(classes)

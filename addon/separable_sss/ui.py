@@ -272,6 +272,10 @@ class SSS_PT_node_main(_SidebarPanel, bpy.types.Panel):
         col.scale_y = 1.3
         col.operator("sss.render", icon='RENDER_STILL')
         col.operator("sss.apply", icon='IMAGE_DATA')
+        if nodes.image_node_file(
+                getattr(context.space_data, "edit_tree", None) and
+                context.space_data.edit_tree.nodes.active):
+            col.operator("sss.scatter_image", icon='NODE_COMPOSITING')
         problem = _scene_problem(scene)
         if problem:
             _wrapped(layout, context, problem, 'ERROR')

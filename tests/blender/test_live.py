@@ -185,3 +185,53 @@ def test_render_with_the_switch_keeps_the_passes(blend, tmp_path):
     assert live.kept(scene).timings["scatter"] >= 0.0
     image, _ = shown_pixels(scene)
     assert image.name == live.image_name(scene)
+
+
+def test_image_node_of_a_farm_render(blend, tmp_path):
+    """A multilayer EXR of passes on a compositor Image node (a farm's
+    render) scatters with the description beside it, live: the open
+    scene's radius scale re-tunes it."""
+    scene = open_rendered(blend, tmp_path)
+    passes, _, desc = pipeline.paths_for(scene, scene.frame_current)
+    assert live.description_beside(passes) == desc
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    tree = compat.compositor_tree(scene, create=True)
+    node = tree.nodes.new("CompositorNodeImage")
+    node.image = bpy.data.images.load(passes)
+    tree.nodes.active = node
+    assert nodes.image_node_file(node) == passes
+    assert bpy.ops.sss.scatter_image() == {'FINISHED'}
+    entry = live.kept(scene)
+    assert entry is not None and entry.fixed is not None
+    _, shown = shown_pixels(scene)
+    out = str(tmp_path / "farm.exr")
+    proc = subprocess.run([os.path.join(BUILD, "sss"), passes, "-o", out,
+                           "--scene", desc, "-q"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    ch, _ = read_channels(out)
+    want = np.stack([ch[f"SSS.Combined.{c}"] for c in "RGBA"], -1)
+    assert np.abs(shown - want).max() <= 1e-5
+    # 0: no scattering (the one other scale a baked back light allows).
+    scene.sss.radius_scale = 0.0
+    assert live.retune(scene)["scatter"] >= 0.0
+    _, plain = shown_pixels(scene)
+    assert not np.allclose(plain, want, atol=1e-4)
+
+
+def test_image_node_without_passes_is_refused(blend, tmp_path):
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    tree = compat.compositor_tree(scene, create=True)
+    node = tree.nodes.new("CompositorNodeImage")
+    tree.nodes.active = node
+    assert not bpy.ops.sss.scatter_image.poll()
+    path = str(tmp_path / "plain.exr")
+    image = bpy.data.images.new("plain", 4, 4, float_buffer=True)
+    image.filepath_raw = path
+    image.file_format = 'OPEN_EXR'
+    image.save()
+    with pytest.raises(pipeline.SSSError, match="DiffDir"):
+        live.keep_file(scene, path)
+    assert live.kept(scene) is None
