@@ -690,8 +690,8 @@ SSS_API sss_result sss_frame_scatter(const sss_frame *frame,
 
 /* Writes the frame's file with the SSS layer (Combined RGBA and DiffLight
  * RGB, width x height x 4 and x 3 floats, packed) added, atomically, as
- * sss_exr_write; the layer stays in the frame (a later write replaces
- * it). */
+ * sss_exr_write; the frame keeps only the file's own passes (its
+ * memory does not grow with a write). */
 SSS_API sss_result sss_frame_write(sss_frame *frame, const char *path,
                                    const float *combined, const float *light,
                                    const sss_exr_options *opt, char *errbuf,

@@ -1967,3 +1967,22 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 	free(tmp);
 	return r;
 }
+
+/* Removes every pass of `layer` (what sss_frame_write added once the file
+ * is written, so that a frame kept for re-tunes holds only the render's
+ * passes). Views of other passes stay valid. */
+void sss__exr_remove_layer(sss_exr *exr, const char *layer)
+{
+	int32_t kept = 0;
+	for (int32_t i = 0; i < exr->pass_count; i++) {
+		xpass *p = &exr->passes[i];
+		if (strcmp(p->layer, layer) == 0) {
+			pass_free(p);
+			free(p->layer);
+			free(p->pass);
+			continue;
+		}
+		exr->passes[kept++] = *p;
+	}
+	exr->pass_count = kept;
+}

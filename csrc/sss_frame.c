@@ -15,6 +15,7 @@ struct sss_frame {
 	sss_passes passes;
 	const char *layer;  /* the view layer scattered, owned by exr */
 	float *thickness;   /* the square root of a squared thickness AOV */
+	int had_result;     /* the file itself has a layer named like ours */
 	char *path;         /* the file read, for messages */
 };
 
@@ -126,6 +127,11 @@ static sss_result frame_from(sss_exr *exr, const char *path,
 	if ((r = back_light_passes(exr, f->layer, &f->passes, &f->thickness,
 	                           path, err, errlen)))
 		goto fail;
+	for (int32_t i = 0; i < sss_exr_pass_count(exr); i++) {
+		const char *name;
+		sss_exr_pass(exr, i, &name, NULL, NULL, NULL);
+		f->had_result |= strcmp(name, SSS_RESULT_LAYER) == 0;
+	}
 	*out = f;
 	return SSS_OK;
 fail:
@@ -249,10 +255,13 @@ sss_result sss_frame_write(sss_frame *frame, const char *path,
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "frame, path, combined and light are required");
 	sss_result r;
-	if ((r = sss_exr_add_pass(frame->exr, SSS_RESULT_LAYER, "Combined",
-	                          "RGBA", combined, err, errlen)) ||
-	    (r = sss_exr_add_pass(frame->exr, SSS_RESULT_LAYER, "DiffLight",
-	                          "RGB", light, err, errlen)))
-		return r;
-	return sss_exr_write(frame->exr, path, opt, err, errlen);
+	if (!(r = sss_exr_add_pass(frame->exr, SSS_RESULT_LAYER, "Combined",
+	                           "RGBA", combined, err, errlen)) &&
+	    !(r = sss_exr_add_pass(frame->exr, SSS_RESULT_LAYER, "DiffLight",
+	                           "RGB", light, err, errlen)))
+		r = sss_exr_write(frame->exr, path, opt, err, errlen);
+	/* A kept frame holds the render's passes, not the result's copy. */
+	if (!frame->had_result)
+		sss__exr_remove_layer(frame->exr, SSS_RESULT_LAYER);
+	return r;
 }

@@ -72,6 +72,9 @@ const char *sss__file_kind(unsigned mode);
 extern const float sss__deon_variance[6];
 extern const float sss__deon_weight[6][3];
 
+/* Removes every pass of a layer from an EXR image (sss_exr.c). */
+void sss__exr_remove_layer(sss_exr *exr, const char *layer);
+
 /* errbuf helper: formats into errbuf when given, returns code. */
 sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
                      const char *fmt, ...)

@@ -134,6 +134,10 @@ static void test_retune(void)
 	                               sizeof err));
 	CHECK("frame.after-write", same_bits(combined, want3, n * 4),
 	      "the written SSS layer leaked into the passes");
+	sss_image v;
+	CHECK_STATUS("frame.not-kept", SSS_ERR_MISSING_PASS,
+	             sss_exr_find(sss_frame_exr(frame), SSS_RESULT_LAYER,
+	                          "Combined", &v));
 
 	/* Misuse is a status with a message, never a crash. */
 	sss_image small = {combined, w - 1, h, 4, 0};
