@@ -29,7 +29,8 @@
 #                 random walk: out/compare/sweep/SCENE/sweep.{png,md,csv}
 #                 and out/compare/sweep/summary.{png,md}
 #   make figures  the README's picture docs/images/head.png (compare on head)
-#   make screenshots  the add-on's panels, docs/images/ui-*.png (Xvfb, 3.4)
+#   make screenshots  the add-on's panels, docs/images/ui-*.png, and a live
+#                 re-tune in a window, docs/images/live.png (Xvfb, 3.4)
 #   make clean    remove build/
 #
 # Results must not depend on the compiler contracting a*b+c into an FMA:
@@ -300,6 +301,11 @@ screenshots: deps all
 	@SSS_LIB=$(abspath $(BUILD))/libsss.so $(SHOT_RUN) | grep ui_screenshots
 	@SSS_LIB=$(abspath $(BUILD))/libsss.so $(SHOT_RUN) --open \
 		| grep ui_screenshots
+	@SSS_LIB=$(abspath $(BUILD))/libsss.so xvfb-run -a -s "-screen 0 1280x720x24" \
+		$(BLENDER) --factory-startup --enable-event-simulate --python \
+		scripts/live_screenshot.py -- $(BUILD)/screenshots/head.blend \
+		$(BUILD)/screenshots | grep live_screenshot
+	@cp $(BUILD)/screenshots/live.png docs/images/live.png
 
 clean:
 	rm -rf $(BUILD)

@@ -257,6 +257,19 @@ def schedule(scene_name):
         bpy.app.timers.register(_settled, first_interval=SETTLE_SECONDS)
 
 
+def changed(owner):
+    """A setting of ours changed on a scene or material (its update
+    callback, properties.py): Blender's depsgraph does not report those."""
+    if isinstance(owner, bpy.types.Scene):
+        names = [owner.name]
+    else:           # a material: any scene may show it
+        names = list(_kept)
+    for name in names:
+        scene = bpy.data.scenes.get(name)
+        if name in _kept and scene is not None and scene.sss.live:
+            schedule(name)
+
+
 @persistent
 def _on_depsgraph(scene, depsgraph):
     for name in [n for n in _kept if n not in bpy.data.scenes]:

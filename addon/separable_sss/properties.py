@@ -6,7 +6,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty,
                        StringProperty)
 
-from . import native
+from . import live, native
 
 PROFILES = [
     ("BLENDER", "From Material",
@@ -225,8 +225,25 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
 
 classes = (SSSMaterialSettings, SSSSceneSettings)
 
+# The scene settings a live re-tune follows (live.py); it follows every
+# material one.
+_SCENE_RETUNE = ("radius_scale", "method", "taps", "live")
+
+
+def _changed(self, _context):
+    live.changed(self.id_data)
+
+
+def _follow(cls, names=None):
+    """Every (or the named) property of cls tells live.py of a change."""
+    for name, prop in cls.__annotations__.items():
+        if names is None or name in names:
+            prop.keywords.setdefault("update", _changed)
+
 
 def register():
+    _follow(SSSMaterialSettings)
+    _follow(SSSSceneSettings, _SCENE_RETUNE)
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.sss = PointerProperty(type=SSSMaterialSettings)

@@ -235,3 +235,26 @@ def test_image_node_without_passes_is_refused(blend, tmp_path):
     with pytest.raises(pipeline.SSSError, match="DiffDir"):
         live.keep_file(scene, path)
     assert live.kept(scene) is None
+
+
+def test_own_settings_schedule_a_retune(blend, tmp_path):
+    """The add-on's own settings tell the live loop of a change (Blender's
+    depsgraph does not report them); settings that do not change the
+    scatter do not."""
+    scene = open_rendered(blend, tmp_path)
+    mat = principled(scene).id_data
+    mat = next(m for m in bpy.data.materials if m.node_tree == mat) \
+        if not isinstance(mat, bpy.types.Material) else mat
+    for owner, name, value in ((mat.sss, "radius_scale", 2.0),
+                               (scene.sss, "method", 'SEPARABLE'),
+                               (scene.sss, "radius_scale", 0.5)):
+        live._pending.clear()
+        setattr(owner, name, value)
+        assert scene.name in live._pending, name
+    live._pending.clear()
+    scene.sss.output_dir = str(tmp_path / "elsewhere")
+    assert scene.name not in live._pending
+    time.sleep(live.SETTLE_SECONDS * 1.5)
+    live._pending[scene.name] = 0.0
+    live._settled()
+    assert live.kept(scene).timings["methods"]
