@@ -110,7 +110,7 @@ deps:
 # python3 on PATH may be another one without them).
 PYTHON ?= /usr/bin/python3
 
-test: deps all $(TESTS) addon $(BUILD)/sss-bench
+test: deps all $(TESTS) addon $(BUILD)/sss-bench $(BUILD)/sss-retune
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
 	@$(MAKE) --no-print-directory blender-test
@@ -136,7 +136,7 @@ SAN := -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer \
 check:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/check CFLAGS="$(SAN)" \
 		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS)) $(BUILD)/check/libsss.so \
-		$(BUILD)/check/sss $(BUILD)/check/sss-bench
+		$(BUILD)/check/sss $(BUILD)/check/sss-bench $(BUILD)/check/sss-retune
 	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
 		SSS_BUILD=$(abspath $(BUILD))/check $(PYTHON) -m pytest -q \
 		-p no:cacheprovider tests/python

@@ -105,3 +105,25 @@ def test_calibrated_runs_and_dumps_its_scene(bench, tmp_path):
         material = json.load(f)["materials"][0]
     assert material["calibration"] == "cycles4-random-walk-skin"
     assert material["mapping"] == "cycles-random-walk"
+
+
+def test_retune_driver_on_a_real_frame():
+    """sss-retune: one frame read, scattered again per radius scale; the
+    figures make bench reports for a live re-tune."""
+    exe = BUILD / "sss-retune"
+    if not exe.exists():
+        pytest.fail(f"{exe} is missing: run make first")
+    out = subprocess.run([str(exe), str(ROOT / "tests/data/blender_8x8.exr"),
+                          str(ROOT / "tests/data/blender_8x8.json"),
+                          "--threads", "1", "--repeat", "2",
+                          "--radius-scale", "1", "--radius-scale", "100"],
+                         capture_output=True, text=True, check=True).stdout
+    rows = [line.split(",") for line in out.splitlines()]
+    assert [r[0] for r in rows] == ["1", "100"]
+    for r in rows:
+        assert r[1:4] == ["8", "8", "1"] and float(r[4]) >= 0.0
+        assert float(r[5]) >= float(r[4])
+    bad = subprocess.run([str(exe), str(ROOT / "tests/data/missing.exr"),
+                          str(ROOT / "tests/data/blender_8x8.json")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 1 and "missing.exr" in bad.stderr
