@@ -105,6 +105,9 @@ def main(argv=None):
     registered = hasattr(bpy.types.Scene, "sss")
     if not registered:
         package.register()
+    # Which add-on and library this worker runs, for the task's log.
+    print(f"farm: add-on {__package__} ({os.path.dirname(__file__)}), "
+          f"library {native.loaded_path()}", flush=True)
     scene = bpy.context.scene
     # Settings given on the command line apply to this run only (the .blend
     # is never saved).

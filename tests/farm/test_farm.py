@@ -232,6 +232,28 @@ def test_openjd_frame_that_cannot_be_scattered(shot, openjd_job, tmp_path):
     no_leftovers(out)
 
 
+def test_openjd_path_mapping(shot, tmp_path):
+    """Paths as the submitting machine wrote them (/studio/...), mapped to
+    this worker's by path mapping rules, as a farm's worker applies them:
+    the .blend, the output folder and the checkout are all mapped."""
+    rules = {"version": "pathmapping-1.0", "path_mapping_rules": [
+        {"source_path_format": "POSIX", "source_path": "/studio/shots",
+         "destination_path": str(shot["work"])},
+        {"source_path_format": "POSIX", "source_path": "/studio/renders",
+         "destination_path": str(tmp_path)},
+        {"source_path_format": "POSIX", "source_path": "/studio/libsss",
+         "destination_path": str(ROOT)}]}
+    code, log = run([need(OPENJD, "openjd-cli"), "run", TEMPLATE,
+                     "--path-mapping-rules", json.dumps(rules),
+                     "-p", "BlendFile=/studio/shots/shot.blend",
+                     "-p", "Frames=3", "-p", "OutputDir=/studio/renders/out",
+                     "-p", "AddonCheckout=/studio/libsss",
+                     "-p", f"BlenderExecutable={shot['blender']}",
+                     "-p", f"SssExecutable={SSS}"], env=checkout_env())
+    assert rendered(log) == [3], log[-3000:]
+    assert_frame(shot, tmp_path / "out", 3)
+
+
 # ---------------------------------------------------------------- Flamenco
 
 def compile_job(shot, out, **settings):
@@ -354,21 +376,42 @@ def test_flamenco_rerun_and_failure(shot, flamenco_job, tmp_path):
 
 # ------------------------------------------------- the add-on, installed
 
+def install_addon(shot, home):
+    """The add-on as an artist installs it, in an empty user folder: the
+    extension with Blender's own operator on 4.5 (its library in the wheel),
+    the legacy zip unpacked into the user add-ons on 3.4 (its library
+    beside it). Returns the environment that Blender then runs in and the
+    add-on's module name."""
+    env = {k: v for k, v in os.environ.items() if k != "SSS_LIB"}
+    if shot["version"] == "3.4":
+        with zipfile.ZipFile(BUILD / "separable_sss.zip") as z:
+            z.extractall(home / "scripts" / "addons")
+        env["BLENDER_USER_SCRIPTS"] = str(home / "scripts")
+        return env, "separable_sss", home / "scripts" / "addons"
+    env["BLENDER_USER_RESOURCES"] = str(home / "resources")
+    zips = sorted(BUILD.glob("separable_sss-*-linux-*.zip"))
+    assert len(zips) == 1, zips
+    run([shot["blender"], "-b", "--python-exit-code", "1", "--python-expr",
+         "import bpy; assert bpy.ops.extensions.package_install_files("
+         f"filepath={str(zips[0])!r}, repo='user_default') == {{'FINISHED'}}"],
+        env=env)
+    return env, "bl_ext.user_default.separable_sss", home / "resources"
+
+
 def test_installed_addon(shot, tmp_path):
     """AddonCheckout empty: the add-on installed in the worker's Blender
-    (the legacy zip, unpacked where Blender looks for user add-ons, with
-    its own library) renders the passes, and the frame equals the add-on's
-    own result."""
-    scripts = tmp_path / "scripts"
-    with zipfile.ZipFile(BUILD / "separable_sss.zip") as z:
-        z.extractall(scripts / "addons")
+    renders the passes with its own library, and the frame equals the
+    add-on's own result."""
+    env, module, where = install_addon(shot, tmp_path / "home")
     out = tmp_path / "out"
-    env = {k: v for k, v in os.environ.items() if k != "SSS_LIB"}
-    env["BLENDER_USER_SCRIPTS"] = str(scripts)
     code, log = run([need(OPENJD, "openjd-cli"), "run", TEMPLATE,
                      "-p", f"BlendFile={shot['blend']}", "-p", "Frames=2",
                      "-p", "ChunkSize=1", "-p", f"OutputDir={out}",
                      "-p", f"BlenderExecutable={shot['blender']}",
                      "-p", f"SssExecutable={SSS}"], env=env)
+    used = re.search(r"farm: add-on (\S+) \((\S+)\), library (\S+)", log)
+    assert used, log[-3000:]
+    assert used[1] == module
+    assert used[2].startswith(str(where)) and used[3].startswith(str(where))
     assert rendered(log) == [2], log[-3000:]
     assert_frame(shot, out, 2)
