@@ -254,6 +254,40 @@ def test_openjd_path_mapping(shot, tmp_path):
     assert_frame(shot, tmp_path / "out", 3)
 
 
+def test_embedded_copies_equal_the_files():
+    """The template's embedded files and the job type's ADDON_BOOTSTRAP are
+    farm/sss_chunk.sh and farm/sss_addon.py, character for character."""
+    code, text = run([OPENJD.parent / "python", "-c",
+                      "import json, sys, yaml; t = yaml.safe_load(open(sys.argv[1]));"
+                      " print(json.dumps({f['filename']: f['data'] for f in"
+                      " t['steps'][0]['script']['embeddedFiles']}))", TEMPLATE])
+    embedded = json.loads(text)
+    files = {name: (ROOT / "farm" / name).read_text()
+             for name in ("sss_chunk.sh", "sss_addon.py")}
+    assert embedded == files
+    js = JOB_TYPE.read_text()
+    bootstrap = re.search(r"const ADDON_BOOTSTRAP = `(.*?)`;", js, re.S)[1]
+    assert bootstrap == files["sss_addon.py"]
+
+
+def test_chunk_script_alone(shot, tmp_path):
+    """farm/sss_chunk.sh run by hand from a checkout (what a Deadline 10,
+    OpenCue or cron task runs): frames 2-3, then again, which does
+    nothing."""
+    out = tmp_path / "out"
+    cmd = ["bash", ROOT / "farm" / "sss_chunk.sh", shot["blend"], out, "2-3",
+           "0", "scene", shot["blender"], SSS, ROOT]
+    code, log = run(cmd, env=checkout_env())
+    assert rendered(log) == [2, 3] and scattered(log) == [2, 3], log[-3000:]
+    for f in (2, 3):
+        assert_frame(shot, out, f)
+    before = stamps(out)
+    code, log = run(cmd, env=checkout_env())
+    assert rendered(log) == [] and scattered(log) == [], log[-3000:]
+    assert stamps(out) == before
+    no_leftovers(out)
+
+
 # ---------------------------------------------------------------- Flamenco
 
 def compile_job(shot, out, **settings):
