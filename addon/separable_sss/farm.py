@@ -6,7 +6,7 @@ run it in `blender -b SHOT.blend` through a short --python-expr that imports
 the add-on from a checkout or from the installed add-on or extension:
 
     ... -- --passes DIR/NAME_####.exr --frames 1-3,7 [--done OUT_####.exr]
-           [--samples N] [--method NAME] [--resolution WxH]
+           [--samples N] [--method NAME]
 
 A frame is skipped when its passes exist (they are written to a temporary
 name and renamed, so an existing file is whole) or when its --done output
@@ -66,7 +66,6 @@ def parse_args(argv):
                    "####: a frame whose output exists is not rendered")
     p.add_argument("--samples", type=int)
     p.add_argument("--method", choices=[n for n, _ in native.methods()])
-    p.add_argument("--resolution", help="WxH")
     args = p.parse_args(argv)
     args.frames = parse_frames(args.frames)
     return args
@@ -113,10 +112,6 @@ def main(argv=None):
     # is never saved).
     if args.samples:
         scene.cycles.samples = args.samples
-    if args.resolution:
-        w, _, h = args.resolution.partition("x")
-        scene.render.resolution_x, scene.render.resolution_y = int(w), int(h)
-        scene.render.resolution_percentage = 100
     if args.method:
         scene.sss.method = args.method.upper().replace("-", "_")
 

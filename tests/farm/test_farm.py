@@ -254,6 +254,31 @@ def test_openjd_path_mapping(shot, tmp_path):
     assert_frame(shot, tmp_path / "out", 3)
 
 
+def test_openjd_samples_and_method(shot, tmp_path):
+    """Samples and Method reach the render and the library: frame 1 equals
+    render_sss.py's with the same --samples and --method, and differs from
+    the scene's own settings."""
+    out = tmp_path / "out"
+    code, log = run([need(OPENJD, "openjd-cli"), "run", TEMPLATE,
+                     "-p", f"BlendFile={shot['blend']}", "-p", "Frames=1",
+                     "-p", "ChunkSize=1", "-p", f"OutputDir={out}",
+                     "-p", "Samples=2", "-p", "Method=disk",
+                     "-p", f"AddonCheckout={ROOT}",
+                     "-p", f"BlenderExecutable={shot['blender']}",
+                     "-p", f"SssExecutable={SSS}"], env=checkout_env())
+    assert "Skin disk" in log, log[-3000:]
+    run([shot["blender"], "-b", shot["blend"], "--python-exit-code", "1",
+         "--python", ROOT / "blender_scripts" / "render_sss.py", "--",
+         "--output", tmp_path / "ref.exr", "--frames", "1", "--samples", "2",
+         "--method", "disk"], env=checkout_env())
+    got, want = channels(out_path(out, 1)), channels(tmp_path / "ref.exr")
+    assert sorted(got) == sorted(want)
+    for name in want:
+        assert np.array_equal(got[name], want[name]), name
+    assert not np.array_equal(got["SSS.Combined.R"],
+                              shot["refs"][1]["SSS.Combined.R"])
+
+
 def test_embedded_copies_equal_the_files():
     """The template's embedded files and the job type's ADDON_BOOTSTRAP are
     farm/sss_chunk.sh and farm/sss_addon.py, character for character."""
