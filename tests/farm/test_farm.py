@@ -313,6 +313,22 @@ def test_chunk_script_alone(shot, tmp_path):
     no_leftovers(out)
 
 
+def test_method_choices_are_the_librarys():
+    """The template's and the job type's Method choices are `scene` and the
+    methods `sss --help` lists."""
+    code, text = run([SSS, "--help"])
+    listed = re.findall(r"^  ([a-z-]+)  ", text.split("\nmethods:\n")[1],
+                        re.M)
+    assert listed[:2] == ["auto", "separable"], text
+    code, text = run([OPENJD.parent / "python", "-c",
+                      "import json, sys, yaml; t = yaml.safe_load(open(sys.argv[1]));"
+                      " print(json.dumps([p for p in t['parameterDefinitions']"
+                      " if p['name'] == 'Method'][0]['allowedValues']))", TEMPLATE])
+    assert json.loads(text) == ["scene", *listed]
+    js = re.search(r'choices: (\[[^\]]*\])', JOB_TYPE.read_text())[1]
+    assert json.loads(js) == ["scene", *listed]
+
+
 # ---------------------------------------------------------------- Flamenco
 
 def compile_job(shot, out, **settings):
