@@ -52,9 +52,15 @@ def run(cmd, env=None, check=True):
     return proc.returncode, log
 
 
-def checkout_env():
+def checkout_env(tmp=None):
+    """The environment of a run from the checkout; with tmp, a private
+    temporary folder (render_sss.py keeps its working files in the add-on's
+    default folder under it)."""
     env = dict(os.environ)
     env["SSS_LIB"] = str(BUILD / "libsss.so")
+    if tmp:
+        Path(tmp).mkdir(parents=True, exist_ok=True)
+        env["TMPDIR"] = str(tmp)
     return env
 
 
@@ -89,7 +95,7 @@ def shot(request, tmp_path_factory):
     run([blender, "-b", blend, "--python-exit-code", "1", "--python",
          ROOT / "blender_scripts" / "render_sss.py", "--",
          "--output", ref / "ref_####.exr", "--frames", "1-3"],
-        env=checkout_env())
+        env=checkout_env(work / "tmp"))
     refs = {f: channels(ref / f"ref_{f:04d}.exr") for f in FRAMES}
     # The frames differ: a frame written under another's number is caught.
     assert not np.array_equal(refs[1]["SSS.Combined.R"],
@@ -270,7 +276,7 @@ def test_openjd_samples_and_method(shot, tmp_path):
     run([shot["blender"], "-b", shot["blend"], "--python-exit-code", "1",
          "--python", ROOT / "blender_scripts" / "render_sss.py", "--",
          "--output", tmp_path / "ref.exr", "--frames", "1", "--samples", "2",
-         "--method", "disk"], env=checkout_env())
+         "--method", "disk"], env=checkout_env(tmp_path / "tmp"))
     got, want = channels(out_path(out, 1)), channels(tmp_path / "ref.exr")
     assert sorted(got) == sorted(want)
     for name in want:
