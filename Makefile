@@ -17,7 +17,7 @@
 #                 extension build/separable_sss-VERSION-PLATFORM.zip (4.2+)
 #   make blender-test  the add-on's tests in every supported Blender
 #   make farm-test the OpenJD template (openjd run) and the Flamenco job type
-#                 (compiled under Node) on a 3-frame job in Blender 3.4, 4.5
+#                 (compiled under Node) on 3 frames in Blender 3.4, 4.5, 5.0
 #   make demo     render the bundled head-sized skin scene headlessly with
 #                 the add-on: out/demo.exr and out/demo.png (before | after)
 #   make demo-c   the library on synthetic passes, no Blender
@@ -182,7 +182,7 @@ blender-test: all addon $(filter $(BUILD)/%,$(BLENDERS))
 # The farm integrations (farm/): the OpenJD template through a real
 # `openjd run` (PyPI's openjd-cli, pinned with hashes, in a virtual
 # environment under the build folder) and the Flamenco job type compiled
-# under Node, each on a 3-frame job in Blender 3.4 and 4.5 (tests/farm/).
+# under Node, each on a 3-frame job in Blender 3.4, 4.5 and 5.0 (tests/farm/).
 OPENJD_VENV := $(BUILD)/openjd
 $(OPENJD_VENV)/.installed: tests/farm/openjd-requirements.txt
 	@echo "installing openjd-cli into $(OPENJD_VENV)"
@@ -194,7 +194,7 @@ $(OPENJD_VENV)/.installed: tests/farm/openjd-requirements.txt
 	@$(OPENJD_VENV)/bin/openjd --version >/dev/null || \
 		{ echo "openjd-cli did not install into $(OPENJD_VENV)" >&2; exit 1; }
 	@touch $@
-farm-test: all addon $(OPENJD_VENV)/.installed $(word 1,$(BPY_BLENDERS))
+farm-test: all addon $(OPENJD_VENV)/.installed $(BPY_BLENDERS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/farm
 
 $(BUILD)/sss-demo: examples/demo.c tests/synth.h $(BUILD)/libsss.so

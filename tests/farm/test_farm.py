@@ -3,8 +3,8 @@
 Flamenco job type compiled under Node by tests/farm/flamenco_harness.js (our
 implementation of Flamenco's job compiler globals: the job type is tested,
 not a Flamenco Manager), its tasks' commands run here in dependency order.
-Each on a 3-frame job in 2 chunks of a small bundled scene, in Blender 3.4
-and 4.5; every frame must equal the add-on's own result for that frame
+Each on a 3-frame job in 2 chunks of a small bundled scene, in Blender 3.4,
+4.5 and 5.0; every frame must equal the add-on's own result for that frame
 (blender_scripts/render_sss.py), a re-run redoes only what is missing, and a
 frame that cannot be scattered fails with the library's message while the
 other frames are written."""
@@ -34,7 +34,8 @@ sys.path.insert(0, str(ROOT / "tests" / "python"))
 from exr import read_channels  # noqa: E402
 
 BLENDERS = {"3.4": "blender",
-            "4.5": str(BUILD / "bpy-4.5.15" / "bin" / "blender")}
+            "4.5": str(BUILD / "bpy-4.5.15" / "bin" / "blender"),
+            "5.0": str(BUILD / "bpy-5.0.1" / "bin" / "blender")}
 
 
 def need(path, what):
