@@ -16,6 +16,8 @@
 #   make addon    the add-on: build/separable_sss.zip (3.4) and the
 #                 extension build/separable_sss-VERSION-PLATFORM.zip (4.2+)
 #   make blender-test  the add-on's tests in every supported Blender
+#   make farm-test the OpenJD template (openjd run) and the Flamenco job type
+#                 (compiled under Node) on 3 frames in Blender 3.4, 4.5, 5.0
 #   make demo     render the bundled head-sized skin scene headlessly with
 #                 the add-on: out/demo.exr and out/demo.png (before | after)
 #   make demo-c   the library on synthetic passes, no Blender
@@ -56,7 +58,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures screenshots clean
+.PHONY: all deps bpy farm-test test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures screenshots clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -114,6 +116,7 @@ test: deps all $(TESTS) addon $(BUILD)/sss-bench $(BUILD)/sss-retune
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
 	@$(MAKE) --no-print-directory blender-test
+	@$(MAKE) --no-print-directory farm-test
 	@if command -v valgrind >/dev/null; then \
 		$(MAKE) --no-print-directory valgrind; \
 	else echo "make valgrind: skipped (valgrind is not installed)"; fi
@@ -176,6 +179,24 @@ blender-test: all addon $(filter $(BUILD)/%,$(BLENDERS))
 		bash scripts/blender-tests.sh $$b $(abspath $(BUILD)) \
 			$(BLENDER_TESTS) || status=1; \
 	done; exit $$status
+
+# The farm integrations (farm/): the OpenJD template through a real
+# `openjd run` (PyPI's openjd-cli, pinned with hashes, in a virtual
+# environment under the build folder) and the Flamenco job type compiled
+# under Node, each on a 3-frame job in Blender 3.4, 4.5 and 5.0 (tests/farm/).
+OPENJD_VENV := $(BUILD)/openjd
+$(OPENJD_VENV)/.installed: tests/farm/openjd-requirements.txt
+	@echo "installing openjd-cli into $(OPENJD_VENV)"
+	@rm -rf $(OPENJD_VENV)
+	@$(PYTHON) -m venv $(OPENJD_VENV)
+	@$(OPENJD_VENV)/bin/python -m pip install -q --disable-pip-version-check \
+		--require-hashes --only-binary :all: \
+		-r tests/farm/openjd-requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
+	@$(OPENJD_VENV)/bin/openjd --version >/dev/null || \
+		{ echo "openjd-cli did not install into $(OPENJD_VENV)" >&2; exit 1; }
+	@touch $@
+farm-test: all addon $(OPENJD_VENV)/.installed $(BPY_BLENDERS)
+	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/farm
 
 $(BUILD)/sss-demo: examples/demo.c tests/synth.h $(BUILD)/libsss.so
 	$(CC) $(CFLAGS) $(WARN) -D_POSIX_C_SOURCE=200809L -Icsrc -Itests -o $@ \

@@ -7,10 +7,11 @@ set -u
 # checks the results independently of the code under test. The comparison
 # (make compare) plots with matplotlib and renders EEVEE under Xvfb with
 # Mesa's software OpenGL. make bench times oiiotool (openimageio-tools).
-# python3-venv: the virtual environments for Blender 4.5 and 5.0 (bpy).
+# python3-venv: the virtual environments for Blender 4.5 and 5.0 (bpy) and
+# openjd-cli. nodejs: the Flamenco job type's compile test (tests/farm/).
 PACKAGES="gcc make libc6-dev pkg-config binutils libpng-dev libopenexr-dev
 libcjson-dev libdeflate-dev blender python3 python3-venv python3-numpy python3-pytest python3-openimageio
-valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri openimageio-tools"
+valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri openimageio-tools nodejs"
 missing=""
 for p in $PACKAGES; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" \
