@@ -36,6 +36,10 @@ typedef struct xchan {
 	uint8_t p_linear; /* perceptual hint, kept for lossy codecs */
 	int32_t index;    /* position among the source's channels, counted
 	                   * over its parts in order; -1: added */
+	uint32_t *raw;    /* a uint channel's own values (width x height),
+	                   * which a float holds exactly only up to 2^24:
+	                   * written back while the float view still reads
+	                   * the same; NULL for other types */
 } xchan;
 
 typedef struct xpass {
@@ -271,8 +275,10 @@ static char *dup_n(const char *s, size_t n)
 
 static void pass_free(xpass *p)
 {
-	for (int32_t k = 0; k < p->count; k++)
+	for (int32_t k = 0; k < p->count; k++) {
 		free(p->chan[k].name);
+		free(p->chan[k].raw);
+	}
 	free(p->chan);
 	free(p->components);
 	free(p->data);
@@ -390,8 +396,11 @@ static int make_components(xpass *p)
 	return 0;
 }
 
-/* Splits a channel name: component after the last dot; before it, layer
- * up to the first dot and the pass, or (no second dot) just the pass. */
+/* Splits a channel name from the end, as Blender does: the component
+ * after the last dot, the pass between the dot before it and that one,
+ * and the layer is all before (Blender's own copies of a view layer are
+ * "ViewLayer.001": "ViewLayer.001.DiffDir.R" is that layer's DiffDir.R).
+ * One dot: just the pass ("DiffDir.R", File Output node naming). */
 static void split_name(const char *name, const char **layer, size_t *layer_len,
                        const char **pass, size_t *pass_len, const char **comp)
 {
@@ -403,12 +412,14 @@ static void split_name(const char *name, const char **layer, size_t *layer_len,
 		return;
 	}
 	*comp = last + 1;
-	const char *first = memchr(name, '.', (size_t)(last - name));
-	if (first) {
+	const char *mid = last;
+	while (mid > name && mid[-1] != '.')
+		mid--;
+	if (mid > name) {
 		*layer = name;
-		*layer_len = (size_t)(first - name);
-		*pass = first + 1;
-		*pass_len = (size_t)(last - first - 1);
+		*layer_len = (size_t)(mid - 1 - name);
+		*pass = mid;
+		*pass_len = (size_t)(last - mid);
 	} else {
 		*pass = name;
 		*pass_len = (size_t)(last - name);
@@ -493,7 +504,7 @@ static sss_result add_channel(sss_exr *exr, const exr_attr_chlist_entry_t *e,
 	memmove(&p->chan[at + 1], &p->chan[at],
 	        (size_t)(p->count - at) * sizeof *p->chan);
 	p->chan[at] = (xchan){name, comp, (int32_t)e->pixel_type, e->p_linear,
-	                      index};
+	                      index, NULL};
 	p->count++;
 	return SSS_OK;
 }
@@ -527,10 +538,12 @@ static sss_result group_channels(sss_exr *exr, char *errbuf,
 
 /* ------------------------------------------------------------- decoding */
 
-/* Where one source channel lands: its pass's buffer and component. */
+/* Where one source channel lands: its pass's buffer and component, and
+ * a uint channel's own plane (decoded there, then converted). */
 typedef struct chan_ref {
 	float *data;
 	int32_t count, k;
+	uint32_t *raw;
 } chan_ref;
 
 typedef struct read_job {
@@ -604,6 +617,15 @@ static void point_channels(const read_job *job, exr_decode_pipeline_t *dec,
 	for (int c = 0; c < dec->channel_count; c++) {
 		exr_coding_channel_info_t *ch = &dec->channels[c];
 		const chan_ref *r = &job->ref[c];
+		if (r->raw) {
+			ch->decode_to_ptr = (uint8_t *)(r->raw + (size_t)y0 *
+			                    (size_t)exr->width + (size_t)x0);
+			ch->user_pixel_stride = (int32_t)sizeof *r->raw;
+			ch->user_line_stride = exr->width * (int32_t)sizeof *r->raw;
+			ch->user_bytes_per_element = (int16_t)sizeof *r->raw;
+			ch->user_data_type = EXR_PIXEL_UINT;
+			continue;
+		}
 		size_t at = ((size_t)y0 * (size_t)exr->width + (size_t)x0) *
 		            (size_t)r->count + (size_t)r->k;
 		ch->decode_to_ptr = (uint8_t *)(r->data + at);
@@ -964,9 +986,17 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 	if (!ref)
 		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
 	for (int32_t j = 0; j < exr->pass_count; j++)
-		for (int32_t k = 0; k < exr->passes[j].count; k++)
-			ref[exr->passes[j].chan[k].index] =
-				(chan_ref){exr->passes[j].data, exr->passes[j].count, k};
+		for (int32_t k = 0; k < exr->passes[j].count; k++) {
+			xchan *ch = &exr->passes[j].chan[k];
+			if (ch->type == EXR_PIXEL_UINT &&
+			    !(ch->raw = calloc(npix, sizeof *ch->raw))) {
+				free(ref);
+				return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory "
+				             "for channel '%s'", path, ch->name);
+			}
+			ref[ch->index] = (chan_ref){exr->passes[j].data,
+			                            exr->passes[j].count, k, ch->raw};
+		}
 	sss_result r = SSS_OK;
 	int32_t first = 0;
 	for (int part = 0; part < exr->part_count && !r; part++) {
@@ -981,6 +1011,15 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 			first += cl->num_channels;
 	}
 	free(ref);
+	/* uint channels into their float view (exact up to 2^24). */
+	for (int32_t j = 0; j < exr->pass_count && !r; j++) {
+		xpass *p = &exr->passes[j];
+		for (int32_t k = 0; k < p->count; k++)
+			if (p->chan[k].raw)
+				for (size_t i = 0; i < npix; i++)
+					p->data[i * (size_t)p->count + (size_t)k] =
+						(float)p->chan[k].raw[i];
+	}
 	return r;
 }
 
@@ -1137,6 +1176,25 @@ int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix)
 	return found;
 }
 
+int64_t sss__exr_channel_count(const sss_exr *exr)
+{
+	int64_t n = 0;
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		n += exr->passes[j].count;
+	return n;
+}
+
+/* OpenEXRCore 3.1 holds a part's channel count in the coding pipelines'
+ * int16_t channel_count: past 32767 the chunks were written empty or
+ * scrambled with exit 0. The type of that field says the ceiling. */
+int32_t sss__exr_max_channels(void)
+{
+	exr_encode_pipeline_t e;
+	(void)e;
+	return sizeof e.channel_count >= 4 ? INT32_MAX
+	       : (int32_t)((1L << (8 * sizeof e.channel_count - 1)) - 1);
+}
+
 /* ------------------------------------------------------------ add pass */
 
 sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
@@ -1151,13 +1209,11 @@ sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
 		                                          : "no components");
 	layer = layer ? layer : "";
 	pass = pass ? pass : "";
-	/* Names must read back as the same layer and pass (split_name). */
-	if (strchr(layer, '.'))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "layer name '%s' must not "
-		             "contain a dot", layer);
-	if (!layer[0] && strchr(pass, '.'))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass name '%s' contains a "
-		             "dot, which needs a layer name", pass);
+	/* Names must read back as the same layer and pass (split_name reads
+	 * from the end: a layer may hold dots, a pass may not). */
+	if (strchr(pass, '.'))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass name '%s' must not "
+		             "contain a dot", pass);
 	size_t n = strlen(components);
 	if (strlen(layer) + strlen(pass) + 3 > MAX_NAME)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "layer and pass names "
@@ -1212,7 +1268,7 @@ sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
 		else
 			snprintf(name, len, "%c", c);
 		np.chan[k] = (xchan){name, name + strlen(name) - 1,
-		                     EXR_PIXEL_FLOAT, 0, -1};
+		                     EXR_PIXEL_FLOAT, 0, -1, NULL};
 	}
 	ok = ok && make_components(&np) == 0;
 	xpass *slot = find_pass(exr, layer, pass);
@@ -1451,9 +1507,15 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 			            (size_t)r->k;
 			if (ch->data_type == EXR_PIXEL_UINT && stage) {
 				uint32_t *dst = stage + (size_t)u++ * plane;
-				for (size_t i = 0; i < plane; i++)
-					dst[i] = float_to_uint_sat(
-						r->data[at + i * (size_t)r->count]);
+				const uint32_t *raw = r->raw ? r->raw + y0 *
+				                      (size_t)exr->width : NULL;
+				/* The channel's own value while its float view still
+				 * reads as it did: above 2^24 a float is not exact. */
+				for (size_t i = 0; i < plane; i++) {
+					float f = r->data[at + i * (size_t)r->count];
+					dst[i] = raw && f == (float)raw[i]
+					         ? raw[i] : float_to_uint_sat(f);
+				}
 				ch->encode_from_ptr = (const uint8_t *)dst;
 				ch->user_pixel_stride = (int32_t)sizeof *dst;
 				ch->user_line_stride = exr->width * (int32_t)sizeof *dst;
@@ -1532,7 +1594,8 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 			for (int32_t k = 0; k < exr->passes[j].count; k++)
 				if (strcmp(exr->passes[j].chan[k].name, name) == 0) {
 					ref[i] = (chan_ref){exr->passes[j].data,
-					                    exr->passes[j].count, k};
+					                    exr->passes[j].count, k,
+					                    exr->passes[j].chan[k].raw};
 					break;
 				}
 		if (!ref[i].data)
@@ -1927,6 +1990,12 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 	if (exr->pass_count == 0)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: the image has no "
 		             "channels to write", path && path[0] ? path : "output");
+	int64_t channels = sss__exr_channel_count(exr);
+	if (channels > sss__exr_max_channels())
+		return FAILX(SSS_ERR_UNSUPPORTED, "%s: %lld channels, more than "
+		             "the %d one file can hold with this OpenEXR; nothing "
+		             "was written", path && path[0] ? path : "output",
+		             (long long)channels, sss__exr_max_channels());
 
 	/* Same device and inode as the source (any name or link to it):
 	 * refused, so a failed or partial run never loses a render. */

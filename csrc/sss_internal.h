@@ -288,6 +288,10 @@ static inline void sss__span(const sss_image *im, const char **lo,
  * whether its header has an attribute whose name starts with prefix. */
 const char *sss__exr_path(const sss_exr *exr);
 int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix);
+/* Channels in the image, and the most one file can hold with the
+ * OpenEXR in use (its coding pipelines count them in 16 bits). */
+int64_t sss__exr_channel_count(const sss_exr *exr);
+int32_t sss__exr_max_channels(void);
 
 /* sss_zip.c: one chunk in OpenEXR's ZIP format through libdeflate.
  * Deflating writes at most out_cap bytes (libdeflate_zlib_compress_bound

@@ -164,6 +164,31 @@ sss_result sss_process_exr(const char *in, const char *out,
 		goto done;
 	t.read = now() - t0;
 
+	/* The result layer is added beside every input channel: an input
+	 * layer of that name (a view layer called SSS, or a file that is
+	 * already an output) would be replaced, so it is refused. So is an
+	 * image the OpenEXR in use could not write back whole. */
+	for (int32_t i = 0; i < sss_exr_pass_count(exr); i++) {
+		const char *l, *p;
+		sss_exr_pass(exr, i, &l, &p, NULL, NULL);
+		if (strcmp(l, SSS_RESULT_LAYER) == 0) {
+			r = sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT, "%s: has "
+			              "a layer '%s' (pass %s), the name of the result "
+			              "layer, which would replace it; rename that view "
+			              "layer in Blender, or give a render, not an "
+			              "output of sss", in, SSS_RESULT_LAYER, p);
+			goto done;
+		}
+	}
+	int64_t channels = sss__exr_channel_count(exr) + 7; /* + the result */
+	if (channels > sss__exr_max_channels()) {
+		r = sss__fail(err, errlen, SSS_ERR_UNSUPPORTED, "%s: %lld channels "
+		              "with the result's 7, more than the %d one file can "
+		              "hold with this OpenEXR; nothing was done", in,
+		              (long long)channels, sss__exr_max_channels());
+		goto done;
+	}
+
 	sss_passes passes;
 	const char *layer = NULL;
 	if ((r = sss_exr_render_passes(exr, opt.layer, &passes, &layer, err,

@@ -443,3 +443,68 @@ def test_blender5_multi_part_render(sss_cmd, tmp_path):
     out = tmp_path / "out.exr"
     run(sss_cmd, src, "-o", out, "--scene", scene, check=0)
     assert "SSS.Combined.R" in read_channels(out)[0]
+
+
+# ------------------------------------------- second round: names, data loss
+
+def dotted_copy(blender_render, path):
+    """The render with a second view layer as Blender names a copy,
+    ViewLayer.001, whose diffuse light is half the first's."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    both = dict(ch)
+    for name, value in ch.items():
+        if name.startswith("ViewLayer."):
+            half = ".DiffDir." in name or ".DiffInd." in name
+            both["ViewLayer.001." + name[len("ViewLayer."):]] = \
+                value * 0.5 if half else value
+    write_channels(path, both, spec.width, spec.height,
+                   attributes={"cycles.ViewLayer.samples": "4",
+                               "cycles.ViewLayer.001.samples": "4"})
+
+
+def test_view_layer_named_with_a_dot(sss_cmd, blender_render, tmp_path):
+    """Names split from the end, as Blender splits them: ViewLayer.001's
+    passes are its own, found by name (-l) and by the first-layer rule."""
+    src = tmp_path / "two.exr"
+    dotted_copy(blender_render, src)
+    lights = {}
+    for layer in ("ViewLayer.001", "ViewLayer", None):
+        out = tmp_path / f"out_{layer}.exr"
+        extra = ["-l", layer] if layer else []
+        run(sss_cmd, *args_for(blender_render, src, out, "--radius-scale",
+                               "0", *extra), check=0)
+        ch, _ = read_channels(out)
+        lights[layer] = pass_rgb(ch, "SSS.DiffLight")
+        assert "ViewLayer.001.DiffDir.R" in ch and "ViewLayer.DiffDir.R" in ch
+    one = pass_rgb(read_channels(src)[0], "ViewLayer.001.DiffDir")
+    assert np.array_equal(lights["ViewLayer.001"],
+                          one + pass_rgb(read_channels(src)[0],
+                                         "ViewLayer.001.DiffInd"))
+    assert np.allclose(lights["ViewLayer"], 2 * lights["ViewLayer.001"])
+    # the first layer with DiffDir, in file order (sorted names)
+    assert np.array_equal(lights[None], lights["ViewLayer.001"])
+    proc = run(sss_cmd, *args_for(blender_render, src, tmp_path / "x.exr",
+                                  "-l", "ViewLayer.002"), check=1)
+    assert "'ViewLayer.001' (" in proc.stderr, proc.stderr
+
+
+def test_input_layer_named_sss_is_never_replaced(sss_cmd, blender_render,
+                                                 tmp_path):
+    """The result layer is SSS: an input layer of that name (a view layer
+    called SSS, or an output given again) is refused, not replaced."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    renamed = {("SSS." + k[len("ViewLayer."):] if k.startswith("ViewLayer.")
+                else k): v for k, v in ch.items()}
+    src = tmp_path / "sss_layer.exr"
+    write_channels(src, renamed, spec.width, spec.height)
+    out = tmp_path / "out.exr"
+    proc = run(sss_cmd, *args_for(blender_render, src, out), check=1)
+    assert "has a layer 'SSS'" in proc.stderr, proc.stderr
+    assert "rename that view layer" in proc.stderr
+    only(tmp_path, "sss_layer.exr")
+    # an output given again as the input: refused the same way
+    run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                           out), check=0)
+    proc = run(sss_cmd, *args_for(blender_render, out, tmp_path / "o2.exr"),
+               check=1)
+    assert "has a layer 'SSS'" in proc.stderr, proc.stderr
