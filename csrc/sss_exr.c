@@ -1852,18 +1852,47 @@ static int temp_prefix(const char *path, char *out, size_t cap,
 	return n >= 0 && (size_t)n < cap ? n : -1;
 }
 
-/* "<pid>-<hex>" and nothing else: what create_temp appends. */
-static int is_temp_suffix(const char *s)
+/* FNV-1a, 32 bits, over a then b. */
+static uint32_t name_check(const char *a, size_t a_len, const char *b,
+                           size_t b_len)
+{
+	uint32_t h = 2166136261u;
+	for (size_t i = 0; i < a_len + b_len; i++) {
+		h ^= (unsigned char)(i < a_len ? a[i] : b[i - a_len]);
+		h *= 16777619u;
+	}
+	return h;
+}
+
+/* What create_temp appends to the name (its prefix without the folder):
+ * "<pid>-<8 hex id><8 hex check>", the check being name_check of the
+ * name up to the check. A file that merely looks like a temporary (an
+ * input or scene someone named ".o.exr.tmp-1-ab") lacks it, and is never
+ * taken for one. */
+static void temp_suffix(const char *name, size_t name_len, long pid,
+                        unsigned long id, char *out, size_t cap)
+{
+	char head[64];
+	snprintf(head, sizeof head, "%ld-%08lx", pid, id & 0xffffffffUL);
+	snprintf(out, cap, "%s%08lx", head,
+	         (unsigned long)name_check(name, name_len, head, strlen(head)));
+}
+
+static int is_temp_suffix(const char *name, size_t name_len, const char *s)
 {
 	const char *p = s;
 	while (*p >= '0' && *p <= '9')
 		p++;
-	if (p == s || *p++ != '-' || !*p)
+	if (p == s || p - s > 20 || *p++ != '-' || strlen(p) != 16)
 		return 0;
-	for (; *p; p++)
-		if (!((*p >= '0' && *p <= '9') || (*p >= 'a' && *p <= 'f')))
+	for (const char *q = p; *q; q++)
+		if (!((*q >= '0' && *q <= '9') || (*q >= 'a' && *q <= 'f')))
 			return 0;
-	return 1;
+	char want[64];
+	temp_suffix(name, name_len, strtol(s, NULL, 10),
+	            strtoul((char[9]){p[0], p[1], p[2], p[3], p[4], p[5], p[6],
+	                              p[7], 0}, NULL, 16), want, sizeof want);
+	return strcmp(want, s) == 0;
 }
 
 static int same_file(const struct stat *a, const struct stat *b)
@@ -1875,8 +1904,10 @@ static int same_file(const struct stat *a, const struct stat *b)
  * holds an exclusive flock on its temporary until it is renamed, so a
  * temporary whose lock can be taken has no live writer, whatever host or
  * PID namespace wrote it (a PID says nothing across those); it is
- * removed only while that lock is held and the name is still that file. */
-static void remove_stale_temporaries(const char *path)
+ * removed only while that lock is held and the name is still that file,
+ * and only if its name carries create_temp's check (temp_suffix) and it
+ * is not the file being written from. */
+static void remove_stale_temporaries(const char *path, const sss_exr *exr)
 {
 	size_t cap = strlen(path) + 64, dir_len;
 	char *prefix = malloc(cap), *full = malloc(cap + 256 + NAME_MAX);
@@ -1892,7 +1923,7 @@ static void remove_stale_temporaries(const char *path)
 	struct dirent *e;
 	while (d && (e = readdir(d))) {
 		if (strncmp(e->d_name, name, name_len) != 0 ||
-		    !is_temp_suffix(e->d_name + name_len))
+		    !is_temp_suffix(name, name_len, e->d_name + name_len))
 			continue;
 		snprintf(full, cap + 256 + NAME_MAX, "%.*s%s", (int)dir_len, path,
 		         e->d_name);
@@ -1901,6 +1932,7 @@ static void remove_stale_temporaries(const char *path)
 			continue;
 		struct stat held, now;
 		if (fstat(fd, &held) == 0 && S_ISREG(held.st_mode) &&
+		    !(held.st_dev == exr->dev && held.st_ino == exr->ino) &&
 		    flock(fd, LOCK_EX | LOCK_NB) == 0 && lstat(full, &now) == 0 &&
 		    same_file(&held, &now))
 			unlink(full);
@@ -1928,8 +1960,8 @@ static int create_locked_temp(const char *path, char **out)
 	/* Time and this call's buffer address: distinct across threads. */
 	unsigned long id = (unsigned long)ts.tv_nsec ^ (unsigned long)(uintptr_t)t;
 	for (int attempt = 0; attempt < 64; attempt++, id += 7919) {
-		snprintf(t + n, cap - (size_t)n, "%ld-%lx", (long)getpid(),
-		         id & 0xffffffUL);
+		temp_suffix(t + dir_len, (size_t)n - dir_len, (long)getpid(), id,
+		            t + n, cap - (size_t)n);
 		int fd = open(t, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
 		if (fd < 0 && errno == EEXIST)
 			continue;
@@ -2008,7 +2040,7 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 	if ((r = sss_exr_check_output(path, errbuf, errbuf_len)))
 		return r;
 
-	remove_stale_temporaries(path);
+	remove_stale_temporaries(path, exr);
 	char *tmp = NULL;
 	int fd = create_temp(path, &o, &tmp);
 	if (fd < 0)

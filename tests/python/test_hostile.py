@@ -27,6 +27,18 @@ def args_for(blender_render, src, out, *extra):
     return [src, "-o", out, "--scene", blender_render / "scene.json", *extra]
 
 
+def temp_name(output_name, pid=999999999, ident=1):
+    """The name a writer gives its temporary for output_name (cut to 128
+    bytes): ".NAME.tmp-PID-IDENT" + FNV-1a of all before it, so that only
+    a file the writer named is ever taken for a stale temporary."""
+    name = "." + output_name[:128] + ".tmp-"
+    head = f"{pid}-{ident:08x}"
+    h = 2166136261
+    for b in (name + head).encode():
+        h = ((h ^ b) * 16777619) & 0xFFFFFFFF
+    return f"{name}{head}{h:08x}"
+
+
 def only(tmp_path, *names):
     """The folder holds exactly these names (no output, no temporary)."""
     assert sorted(os.listdir(tmp_path)) == sorted(names)
@@ -231,7 +243,7 @@ def test_resume_after_a_killed_run(sss_cmd, blender_render, tmp_path):
         assert "SSS.Combined.R" in ch
     stamps = {n: (tmp_path / n).stat().st_mtime_ns for n in done}
     # A temporary file of a process that is gone, as a kill can leave.
-    (tmp_path / ".out_0040.exr.tmp-999999999-1").write_bytes(b"partial")
+    (tmp_path / temp_name("out_0040.exr")).write_bytes(b"partial")
     proc = run(*args[:-1], "--resume", check=0)
     assert not list(tmp_path.glob(".*tmp*")), "stale temporary kept"
     assert f"{len(done)} skipped" in proc.stdout
@@ -309,7 +321,7 @@ def test_long_output_name_cleans_its_own_stale_temporary(
     """Over 128 bytes the temporary's name is cut; the clean-up matches
     the same cut name."""
     name = "n" * 200 + ".exr"
-    stale = tmp_path / ("." + name[:128] + ".tmp-999999999-1")
+    stale = tmp_path / temp_name(name)
     stale.write_bytes(b"partial")
     run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
                            tmp_path / name), check=0)
@@ -321,8 +333,8 @@ def test_live_writers_temporary_is_never_deleted(sss_cmd, blender_render,
     """Another writer (another host or PID namespace: its PID means
     nothing here) holds the lock on its temporary; it is kept. An unlocked
     one is stale and goes."""
-    live = tmp_path / ".out.exr.tmp-999999999-a1"
-    stale = tmp_path / ".out.exr.tmp-999999999-b2"
+    live = tmp_path / temp_name("out.exr", ident=0xa1)
+    stale = tmp_path / temp_name("out.exr", ident=0xb2)
     stale.write_bytes(b"left by a killed run")
     with open(live, "wb") as held:
         fcntl.flock(held, fcntl.LOCK_EX)
@@ -508,3 +520,20 @@ def test_input_layer_named_sss_is_never_replaced(sss_cmd, blender_render,
     proc = run(sss_cmd, *args_for(blender_render, out, tmp_path / "o2.exr"),
                check=1)
     assert "has a layer 'SSS'" in proc.stderr, proc.stderr
+
+
+def test_clean_up_deletes_only_what_a_writer_named(sss_cmd, blender_render,
+                                                   tmp_path):
+    """An input and a scene whose names merely look like the output's
+    temporaries are never deleted by the stale-temporary clean-up; nor is
+    the input even when its name is one a writer could have made."""
+    src = tmp_path / ".o.exr.tmp-1-ab"
+    scene = tmp_path / ".o.exr.tmp-2-cd"
+    shutil.copy(blender_render / "render.exr", src)
+    shutil.copy(blender_render / "scene.json", scene)
+    run(sss_cmd, src, "-o", tmp_path / "o.exr", "--scene", scene, check=0)
+    only(tmp_path, src.name, scene.name, "o.exr")
+    named = tmp_path / temp_name("p.exr", pid=1, ident=2)
+    shutil.copy(blender_render / "render.exr", named)
+    run(sss_cmd, named, "-o", tmp_path / "p.exr", "--scene", scene, check=0)
+    assert named.exists()
