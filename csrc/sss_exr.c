@@ -1564,8 +1564,7 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 	if (lines < 1 || cl->num_channels < 1)
 		return EXR_ERR_INVALID_ARGUMENT;
 	int32_t chunks = (int32_t)(((int64_t)exr->height + lines - 1) / lines);
-	int32_t slots = threads > 0 ? threads
-	                            : (int32_t)sysconf(_SC_NPROCESSORS_ONLN);
+	int32_t slots = threads > 0 ? threads : sss__cpu_count();
 	slots = slots < 1 ? 1 : slots > chunks ? chunks : slots;
 
 	write_job job = {.ctxt = c, .part = part, .exr = exr};
@@ -1785,6 +1784,36 @@ static sss_result write_file(const sss_exr *exr, const sss_exr_options *o,
 
 /* ------------------------------------------------- output and temporary */
 
+static int create_locked_temp(const char *path, char **out);
+
+/* The output's folder takes a new file: a temporary is created there and
+ * removed at once (signals wait meanwhile), so that a read-only folder,
+ * file system or a full inode table is said before any work, for root
+ * too (access() would let root through). */
+static sss_result check_folder(const char *path, char *errbuf,
+                               size_t errbuf_len)
+{
+	sigset_t all, old;
+	char *t = NULL;
+	sigfillset(&all);
+	pthread_sigmask(SIG_BLOCK, &all, &old);
+	int fd = create_locked_temp(path, &t);
+	int e = errno;
+	if (fd >= 0) {
+		unlink(t);
+		close(fd);
+	}
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	free(t);
+	if (fd >= 0)
+		return SSS_OK;
+	const char *slash = strrchr(path, '/');
+	int n = slash ? (slash == path ? 1 : (int)(slash - path)) : 1;
+	return FAILX(e == ENOMEM ? SSS_ERR_OUT_OF_MEMORY : SSS_ERR_IO,
+	             "%s: its folder %.*s is not writable: %s", path, n,
+	             slash ? path : ".", strerror(e));
+}
+
 sss_result sss_exr_check_output(const char *path, char *errbuf,
                                 size_t errbuf_len)
 {
@@ -1813,7 +1842,7 @@ sss_result sss_exr_check_output(const char *path, char *errbuf,
 		sss_result r = bad ? FAILX(SSS_ERR_IO, "%s: its folder %s: %s",
 		                           path, dir, strerror(bad)) : SSS_OK;
 		free(dir);
-		return r;
+		return r ? r : check_folder(path, errbuf, errbuf_len);
 	}
 	if (S_ISLNK(st.st_mode)) {
 		char target[512];
@@ -1831,7 +1860,7 @@ sss_result sss_exr_check_output(const char *path, char *errbuf,
 	if (!(st.st_mode & 0222) || access(path, W_OK) != 0)
 		return FAILX(SSS_ERR_IO, "%s: is read-only (mode %04o); it is not "
 		             "replaced", path, (unsigned)(st.st_mode & 07777));
-	return SSS_OK;
+	return check_folder(path, errbuf, errbuf_len);
 }
 
 /* Temporaries are "<dir>/.<name>.tmp-<pid>-<hex>" beside their output (so
@@ -2047,6 +2076,15 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 		return FAILX(errno == ENOMEM ? SSS_ERR_OUT_OF_MEMORY : SSS_ERR_IO,
 		             "%s: cannot create a temporary file in its directory: "
 		             "%s", path, strerror(errno));
+	/* A replaced output keeps its permission bits (and, for root, its
+	 * owner). Its hard links are not kept: the rename that makes the
+	 * write atomic gives the name a new file. */
+	struct stat old;
+	if (lstat(path, &old) == 0 && S_ISREG(old.st_mode)) {
+		fchmod(fd, old.st_mode & 07777);
+		if (geteuid() == 0 && fchown(fd, old.st_uid, old.st_gid) == 0)
+			fchmod(fd, old.st_mode & 07777); /* chown drops set-id */
+	}
 	xio io;
 	xio_init(&io, fd);
 	r = write_file(exr, &o, path, tmp, &io, errbuf, errbuf_len);

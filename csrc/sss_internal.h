@@ -260,6 +260,9 @@ static inline void sss__blend_pixel(const sss__kernel *k, const float *blurred,
 
 /* Row-band threading (sss_threads.c): fn(ctx, y0, y1) over [0, height). */
 typedef void (*sss__rows_fn)(void *ctx, int32_t y0, int32_t y1);
+/* The CPUs this process may run on (its affinity mask, as taskset and
+ * a farm's CPU pinning set it), else the online ones; "all cores". */
+int32_t sss__cpu_count(void);
 void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
                         void *ctx);
 

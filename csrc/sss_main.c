@@ -305,7 +305,7 @@ static int expand(const char *pattern, int frame, char *out, size_t len)
 /* ------------------------------------------------- stopping mid-write */
 
 /* The temporary file being written (the library says, through
- * temporary_fn), so that SIGINT, SIGTERM, SIGHUP and SIGQUIT remove it
+ * temporary_fn), so that a stopping signal (stop_signals) removes it
  * before the process dies of the signal; SIGKILL leaves it to the next
  * run's clean-up (see sss_exr_write). */
 static char pending_temp[8192];
@@ -323,27 +323,92 @@ static void on_temporary(const char *path, void *user)
 	}
 }
 
+/* The signals that stop a process by default and that a user, a shell
+ * or a farm's scheduler sends: Ctrl-C, kill, a closed terminal or pipe,
+ * an alarm, user signals, and the CPU-time and file-size limits
+ * (ulimit -t, ulimit -f) that schedulers set. The faults (SIGSEGV, ...)
+ * are not caught. Real-time signals also stop by default: caught too. */
+static const struct {
+	int sig;
+	const char *name, *why;
+} stop_signals[] = {
+	{SIGINT, "SIGINT", "interrupted"},
+	{SIGTERM, "SIGTERM", "terminated"},
+	{SIGHUP, "SIGHUP", "its terminal closed"},
+	{SIGQUIT, "SIGQUIT", "quit"},
+	{SIGPIPE, "SIGPIPE", "a closed pipe"},
+	{SIGALRM, "SIGALRM", "an alarm"},
+	{SIGUSR1, "SIGUSR1", "a user signal"},
+	{SIGUSR2, "SIGUSR2", "a user signal"},
+	{SIGXCPU, "SIGXCPU", "its CPU time limit (ulimit -t)"},
+	{SIGXFSZ, "SIGXFSZ", "its file size limit (ulimit -f)"},
+	{SIGVTALRM, "SIGVTALRM", "a virtual timer"},
+	{SIGPROF, "SIGPROF", "a profiling timer"},
+#ifdef SIGPOLL
+	{SIGPOLL, "SIGPOLL", "a pollable event"},
+#endif
+#ifdef SIGPWR
+	{SIGPWR, "SIGPWR", "a power failure"},
+#endif
+};
+
+/* Appends text at *at within buf (async-signal-safe). */
+static void put(char *buf, size_t cap, size_t *at, const char *text)
+{
+	for (; *text && *at + 1 < cap; text++)
+		buf[(*at)++] = *text;
+}
+
+/* "sss: stopped by SIGXFSZ (its file size limit (ulimit -f)); removed the
+ * temporary X", written with write(2) only. */
 static void on_signal(int sig)
 {
-	if (have_temp)
-		unlink(pending_temp);
+	static char msg[sizeof pending_temp + 256];
+	size_t at = 0;
+	const char *name = "a signal", *why = "";
+	for (size_t i = 0; i < sizeof stop_signals / sizeof *stop_signals; i++)
+		if (stop_signals[i].sig == sig) {
+			name = stop_signals[i].name;
+			why = stop_signals[i].why;
+		}
+	put(msg, sizeof msg, &at, "\nsss: stopped by ");
+	put(msg, sizeof msg, &at, name);
+	if (why[0]) {
+		put(msg, sizeof msg, &at, " (");
+		put(msg, sizeof msg, &at, why);
+		put(msg, sizeof msg, &at, ")");
+	}
+	if (have_temp && unlink(pending_temp) == 0) {
+		put(msg, sizeof msg, &at, "; removed the unfinished ");
+		put(msg, sizeof msg, &at, pending_temp);
+	}
+	put(msg, sizeof msg, &at, "\n");
+	if (sig != SIGPIPE) /* stderr may be that pipe */
+		(void)!write(STDERR_FILENO, msg, at);
 	signal(sig, SIG_DFL);
 	raise(sig);
 }
 
+static void catch_one(int sig, const struct sigaction *sa)
+{
+	struct sigaction old;
+	/* An ignored signal stays ignored (nohup, a shell's &). */
+	if (sigaction(sig, NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+		sigaction(sig, sa, NULL);
+}
+
 static void catch_signals(void)
 {
-	static const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
 	struct sigaction sa;
 	memset(&sa, 0, sizeof sa);
 	sa.sa_handler = on_signal;
 	sigfillset(&sa.sa_mask); /* one handler at a time */
-	for (size_t i = 0; i < sizeof sigs / sizeof *sigs; i++) {
-		struct sigaction old;
-		/* An ignored signal stays ignored (nohup, a shell's &). */
-		if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
-			sigaction(sigs[i], &sa, NULL);
-	}
+	for (size_t i = 0; i < sizeof stop_signals / sizeof *stop_signals; i++)
+		catch_one(stop_signals[i].sig, &sa);
+#if defined(SIGRTMIN) && defined(SIGRTMAX)
+	for (int sig = SIGRTMIN; sig <= SIGRTMAX; sig++)
+		catch_one(sig, &sa);
+#endif
 }
 
 /* ----------------------------------------------------- per-frame checks */

@@ -158,6 +158,12 @@ sss_result sss_process_exr(const char *in, const char *out,
 	opt.exr.progress_fn = opt.progress_fn ? stage_progress : NULL;
 	opt.exr.progress_user = &prog;
 
+	/* The thread count holds for the EXR decode and encode too, unless
+	 * the EXR options set their own. */
+	if (opt.exr.num_threads == 0)
+		opt.exr.num_threads = opt.num_threads >= 0 ? opt.num_threads
+		                      : sss_scene_options(scene)->num_threads;
+
 	tell(&prog, "read", 0.0);
 	double t0 = now();
 	if ((r = sss_exr_read(in, &opt.exr, &exr, err, errlen)))

@@ -537,3 +537,126 @@ def test_clean_up_deletes_only_what_a_writer_named(sss_cmd, blender_render,
     shutil.copy(blender_render / "render.exr", named)
     run(sss_cmd, named, "-o", tmp_path / "p.exr", "--scene", scene, check=0)
     assert named.exists()
+
+
+# ------------------------------------------- second round: farms, limits
+
+def test_file_size_limit_signal_removes_the_temporary(sss_cmd, blender_render,
+                                                      tmp_path):
+    """ulimit -f as a farm sets it, SIGXFSZ at its default: the command
+    says so, removes its temporary and dies of the signal."""
+    import resource
+
+    def small_disk():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))
+
+    out = tmp_path / "out.exr"
+    proc = subprocess.run([sss_cmd, *map(str, args_for(
+        blender_render, blender_render / "render.exr", out))],
+        capture_output=True, text=True, preexec_fn=small_disk, timeout=HANG)
+    assert proc.returncode == -signal.SIGXFSZ, (proc.returncode, proc.stderr)
+    assert "stopped by SIGXFSZ" in proc.stderr and "ulimit -f" in \
+        proc.stderr, proc.stderr
+    assert "removed the unfinished" in proc.stderr
+    only(tmp_path)
+
+
+def test_cpu_time_limit_signal_is_said(sss_cmd, blender_render, big_render,
+                                       tmp_path):
+    """ulimit -t: SIGXCPU at the soft limit is reported, nothing is left."""
+    import resource
+
+    def one_second():
+        resource.setrlimit(resource.RLIMIT_CPU, (1, 60))
+
+    proc = subprocess.run([sss_cmd, *map(str, args_for(
+        blender_render, big_render, tmp_path / "out.exr", "--method",
+        "reference", "--threads", "1", "--radius-scale", "30"))], capture_output=True, text=True,
+        preexec_fn=one_second, timeout=120)
+    assert proc.returncode == -signal.SIGXCPU, (proc.returncode, proc.stderr)
+    assert "stopped by SIGXCPU" in proc.stderr and "ulimit -t" in proc.stderr
+    only(tmp_path)
+
+
+def test_replaced_output_keeps_its_mode(sss_cmd, blender_render, tmp_path):
+    out = tmp_path / "out.exr"
+    out.write_bytes(b"an earlier result")
+    out.chmod(0o640)
+    run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                           out), check=0)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o640
+    assert "SSS.Combined.R" in read_channels(out)[0]
+
+
+def test_unwritable_folder_is_said_before_the_work(sss_cmd, blender_render,
+                                                   tmp_path):
+    """A folder that takes no new file (procfs: not even root may create
+    one there; a 0555 folder for other users) is said before the frame is
+    read or scattered."""
+    folders = ["/proc"]
+    if os.geteuid() != 0:
+        locked = tmp_path / "locked"
+        locked.mkdir(mode=0o555)
+        folders.append(str(locked))
+    for folder in folders:
+        proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                      "render.exr", folder + "/out.exr"),
+                   check=1)
+        assert f"its folder {folder} is not writable" in proc.stderr, \
+            proc.stderr
+        assert "->" not in proc.stdout
+
+
+COUNT_THREADS = r"""
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+static int started;
+int pthread_create(pthread_t *t, const pthread_attr_t *a,
+                   void *(*fn)(void *), void *arg)
+{
+    int (*real)(pthread_t *, const pthread_attr_t *, void *(*)(void *),
+                void *) = dlsym(RTLD_NEXT, "pthread_create");
+    __atomic_add_fetch(&started, 1, __ATOMIC_SEQ_CST);
+    return real(t, a, fn, arg);
+}
+__attribute__((destructor)) static void report(void)
+{
+    FILE *f = fopen(getenv("THREADS_REPORT"), "w");
+    if (f) { fprintf(f, "%d\n", started); fclose(f); }
+}
+"""
+
+
+def threads_started(sss_cmd, args, tmp_path, shim, cpus=None):
+    report = tmp_path / "threads.txt"
+    env = dict(os.environ, LD_PRELOAD=str(shim), THREADS_REPORT=str(report),
+               ASAN_OPTIONS=os.environ.get("ASAN_OPTIONS", "") +
+               ":verify_asan_link_order=0")
+    proc = subprocess.run([sss_cmd, *map(str, args)], env=env,
+                          capture_output=True, text=True, timeout=HANG,
+                          preexec_fn=(lambda: os.sched_setaffinity(0, cpus))
+                          if cpus else None)
+    assert proc.returncode == 0, proc.stderr
+    return int(report.read_text())
+
+
+def test_threads_hold_for_the_exr_coder(sss_cmd, blender_render, big_render,
+                                        tmp_path):
+    """--threads 1 runs everything on one thread, the EXR decode and
+    encode included; "all cores" is the CPUs of the affinity mask."""
+    if not shutil.which("cc"):
+        pytest.skip("no C compiler for the pthread_create counter")
+    shim = tmp_path / "count.so"
+    (tmp_path / "count.c").write_text(COUNT_THREADS)
+    subprocess.run(["cc", "-shared", "-fPIC", "-o", str(shim),
+                    str(tmp_path / "count.c"), "-ldl"], check=True)
+    args = args_for(blender_render, big_render, tmp_path / "out.exr", "-q")
+    assert threads_started(sss_cmd, [*args, "--threads", "1"], tmp_path,
+                           shim) == 0
+    assert threads_started(sss_cmd, [*args, "--threads", "2"], tmp_path,
+                           shim) > 0  # the counter counts
+    assert threads_started(sss_cmd, [*args, "--threads", "0"], tmp_path,
+                           shim, cpus={0}) == 0
