@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 8
+#define SSS_ABI_VERSION 9
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -507,6 +507,14 @@ typedef struct sss_exr_options {
 	 * round of chunks written. NULL = not told. */
 	void (*progress_fn)(double done, void *user);
 	void *progress_user;
+	/* reading, checked from the header before any pixel is allocated:
+	 * the most channels (default 4096; Blender's renders hold tens to a
+	 * few hundred) and the most bytes the decoded image may take (width
+	 * x height x channels x 4, uint channels 8; default 0: the machine's
+	 * physical memory). A struct_size without these fields (ABI 8) reads
+	 * as the defaults. */
+	int32_t max_channels;
+	int64_t max_bytes;
 } sss_exr_options;
 
 SSS_API void sss_exr_options_default(sss_exr_options *opt);

@@ -5,6 +5,7 @@
 #include "sss.h"
 
 #include <ctype.h>
+#include <limits.h>
 #include <errno.h>
 #include <getopt.h>
 #include <signal.h>
@@ -52,6 +53,10 @@ static const char usage_text[] =
 "  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
 "      --max-size WxH      refuse inputs larger than this, each 1..1048576\n"
 "                          (default 32768x32768 and 2^28 pixels in all)\n"
+"      --max-channels N    refuse inputs with more channels (default 4096)\n"
+"      --max-memory SIZE   refuse inputs that take more memory decoded, in\n"
+"                          bytes or with K, M, G, T (default: the machine's\n"
+"                          physical memory)\n"
 "      --resume            skip frames whose output exists and reads back\n"
 "                          complete (outputs appear only when complete, so\n"
 "                          a stopped run resumes)\n"
@@ -78,6 +83,7 @@ typedef struct args {
 	int samples;         /* -1 = the scene's */
 	int max_w, max_h;
 	long long max_pixels; /* 0: the library's default */
+	long long max_channels, max_bytes; /* -1: the library's default */
 	int quiet;
 	int resume;
 } args;
@@ -191,6 +197,27 @@ static int parse_size(const char *text, int *w, int *h)
 		return -1;
 	*w = (int)a;
 	*h = (int)b;
+	return 0;
+}
+
+/* "8G", "512M", "1048576", "0": bytes (K, M, G, T: powers of 1024). */
+static int parse_bytes(const char *text, long long *out)
+{
+	static const char units[] = "KMGT";
+	char digits[24];
+	size_t n = strlen(text);
+	const char *unit = n ? strchr(units, text[n - 1]) : NULL;
+	int shift = unit && text[n - 1] ? 10 * (int)(unit - units + 1) : 0;
+	if (shift)
+		n--;
+	if (n == 0 || n >= sizeof digits)
+		return -1;
+	memcpy(digits, text, n);
+	digits[n] = '\0';
+	long long v;
+	if (parse_int(digits, 0, LLONG_MAX >> shift, &v))
+		return -1;
+	*out = v << shift;
 	return 0;
 }
 
@@ -487,7 +514,7 @@ static void progress_bar(int done, int total, int failed)
 int main(int argc, char **argv)
 {
 	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, -1, 32768, 32768,
-	          0, 0, 0};
+	          0, -1, -1, 0, 0};
 	static const struct option longopts[] = {
 		{"output", required_argument, NULL, 'o'},
 		{"scene", required_argument, NULL, 's'},
@@ -499,6 +526,8 @@ int main(int argc, char **argv)
 		{"threads", required_argument, NULL, 't'},
 		{"max-size", required_argument, NULL, 'S'},
 		{"samples", required_argument, NULL, 'N'},
+		{"max-channels", required_argument, NULL, 'C'},
+		{"max-memory", required_argument, NULL, 'M'},
 		{"quiet", no_argument, NULL, 'q'},
 		{"resume", no_argument, NULL, 'R'},
 		{"help", no_argument, NULL, 'h'},
@@ -551,6 +580,17 @@ int main(int argc, char **argv)
 			if (parse_int(optarg, 1, 4096, &n))
 				return usage_error("--samples '%s' must be 1..4096", optarg);
 			a.samples = (int)n;
+			break;
+		case 'C':
+			if (parse_int(optarg, 1, INT32_MAX, &a.max_channels))
+				return usage_error("--max-channels '%s' must be "
+				                   "1..2147483647", optarg);
+			break;
+		case 'M':
+			if (parse_bytes(optarg, &a.max_bytes))
+				return usage_error("--max-memory '%s' must be a size "
+				                   "like 8G, 512M or 0 (the machine's "
+				                   "memory)", optarg);
 			break;
 		case 'S':
 			if (parse_size(optarg, &a.max_w, &a.max_h))
@@ -631,6 +671,10 @@ int main(int argc, char **argv)
 		po.exr.max_pixels = a.max_pixels;
 	if (a.compression >= 0)
 		po.exr.compression = a.compression;
+	if (a.max_channels > 0)
+		po.exr.max_channels = (int32_t)a.max_channels;
+	if (a.max_bytes >= 0)
+		po.exr.max_bytes = a.max_bytes;
 	po.exr.temporary_fn = on_temporary;
 	/* The method each material ran, told when it changes (auto chooses
 	 * per frame). */

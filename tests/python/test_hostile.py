@@ -660,3 +660,60 @@ def test_threads_hold_for_the_exr_coder(sss_cmd, blender_render, big_render,
                            shim) > 0  # the counter counts
     assert threads_started(sss_cmd, [*args, "--threads", "0"], tmp_path,
                            shim, cpus={0}) == 0
+
+
+# ------------------------------------------- second round: memory bombs
+
+def with_extra_channels(blender_render, path, extra, size=None):
+    """The render (cropped to size x size around its middle) with `extra`
+    more one-component passes in a layer of their own."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    w, h = spec.width, spec.height
+    if size:
+        y0, x0 = (h - size) // 2, (w - size) // 2
+        ch = {k: v[y0:y0 + size, x0:x0 + size] for k, v in ch.items()}
+        w = h = size
+    zero = np.zeros((h, w), np.float32)
+    for i in range(extra):
+        ch[f"Extra.P{i:05d}.V"] = zero
+    write_channels(path, ch, w, h)
+    return len(ch)
+
+
+def test_channel_and_memory_limits_from_the_header(sss_cmd, blender_render,
+                                                   tmp_path):
+    src = tmp_path / "many.exr"
+    total = with_extra_channels(blender_render, src, 4100, size=4)
+    proc = run(sss_cmd, *args_for(blender_render, src, tmp_path / "o.exr"),
+               check=1)
+    assert f"{total} channels, more than the limit of 4096" in proc.stderr
+    assert "--max-channels" in proc.stderr, proc.stderr
+    run(sss_cmd, *args_for(blender_render, src, tmp_path / "o.exr",
+                           "--max-channels", str(total)), check=0)
+    # memory: the 64x64 render's channels at 4 bytes, against 64 KiB
+    proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                  "render.exr", tmp_path / "o2.exr",
+                                  "--max-memory", "64K"), check=1)
+    assert "GiB decoded, more than the limit of" in proc.stderr
+    assert "--max-memory" in proc.stderr, proc.stderr
+    assert not (tmp_path / "o2.exr").exists()
+    for bad in ("12Q", "-1G", "", "G"):
+        proc = run(sss_cmd, *args_for(blender_render, src, tmp_path /
+                                      "o3.exr", "--max-memory", bad), check=2)
+        assert "--max-memory" in proc.stderr
+
+
+def test_openexr_channel_ceiling_refused_before_work(sss_cmd, blender_render,
+                                                     tmp_path):
+    """OpenEXRCore 3.1 counts a part's channels in 16 bits: an output
+    past 32767 channels was written empty or scrambled with exit 0."""
+    src = tmp_path / "ceiling.exr"
+    base = len(read_channels(blender_render / "render.exr")[0])
+    total = with_extra_channels(blender_render, src, 32765 - base, size=2)
+    assert total == 32765
+    proc = run(sss_cmd, *args_for(blender_render, src, tmp_path / "o.exr",
+                                  "--max-channels", "40000"), check=1)
+    assert f"{total + 7} channels with the result's 7, more than the " \
+        "32767 one file can hold" in proc.stderr, proc.stderr
+    assert "->" not in proc.stdout
+    only(tmp_path, "ceiling.exr")
