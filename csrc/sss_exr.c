@@ -1013,6 +1013,10 @@ static sss_result decode_part(sss_exr *exr, const sss_exr_options *o,
 		snprintf(where, sizeof where, "part '%.30s', ", name);
 	if (job.rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED)
 		snprintf(what, sizeof what, "decoding the pixels");
+	else if (job.rv == EXR_ERR_OUT_OF_MEMORY)
+		snprintf(what, sizeof what, "out of memory while decoding (%sthe "
+		         "%s at y %d)", where, job.tiled ? "tile" : "scanlines",
+		         exr->data_window.min.y + job.bad_y);
 	else if (job.tiled)
 		snprintf(what, sizeof what, "truncated or corrupt (%sthe tile at "
 		         "x %d, y %d)", where, exr->data_window.min.x + job.bad_x,

@@ -113,6 +113,28 @@ static void print_usage(void)
 	fputs(usage_examples, stdout);
 }
 
+/* s with every control byte (ESC, CR, LF, ...) shown as \xNN, so that a
+ * name from a file (a material, a layer, a path) can neither move the
+ * terminal's cursor nor start a line of its own. */
+static void put_clean(FILE *f, const char *s)
+{
+	for (; *s; s++) {
+		unsigned char ch = (unsigned char)*s;
+		if (ch < 0x20 || ch == 0x7f)
+			fprintf(f, "\\x%02x", ch);
+		else
+			fputc(ch, f);
+	}
+}
+
+/* "sss: <prefix><text>\n" on f, text cleaned. */
+static void say(FILE *f, const char *prefix, const char *text)
+{
+	fprintf(f, "sss: %s", prefix);
+	put_clean(f, text);
+	fputc('\n', f);
+}
+
 /* "  methods: Skin disk, Jade separable" when any material's method
  * differs from the last frame's. */
 static void tell_methods(const sss_scene *scene, int32_t n,
@@ -125,8 +147,9 @@ static void tell_methods(const sss_scene *scene, int32_t n,
 		if (chosen[m] < 0)
 			continue;
 		const char *name = sss_scene_material_name(scene, m);
-		printf("%s%s %s", sep, name && *name ? name : "(unnamed)",
-		       sss_method_name(chosen[m]));
+		fputs(sep, stdout);
+		put_clean(stdout, name && *name ? name : "(unnamed)");
+		printf(" %s", sss_method_name(chosen[m]));
 		sep = ", ";
 	}
 	if (sep[0] == ',')
@@ -145,9 +168,10 @@ static int method_by_name(const char *name)
 
 static int usage_error(const char *fmt, const char *what)
 {
-	fprintf(stderr, "sss: ");
-	fprintf(stderr, fmt, what);
-	fprintf(stderr, "\nTry 'sss --help'.\n");
+	char text[1024];
+	snprintf(text, sizeof text, fmt, what);
+	say(stderr, "", text);
+	fprintf(stderr, "Try 'sss --help'.\n");
 	return 2;
 }
 
@@ -631,8 +655,9 @@ int main(int argc, char **argv)
 	if (a.frames) {
 		const char *why = parse_frames(a.frames, &frames);
 		if (why) {
-			fprintf(stderr, "sss: bad --frames '%s': %s\nTry 'sss --help'."
-			        "\n", a.frames, why);
+			fprintf(stderr, "sss: bad --frames '");
+			put_clean(stderr, a.frames);
+			fprintf(stderr, "': %s\nTry 'sss --help'.\n", why);
 			return 2;
 		}
 	} else {
@@ -644,11 +669,17 @@ int main(int argc, char **argv)
 	sss_scene *scene = NULL;
 	sss_result r = sss_scene_load(a.scene, &scene, warn, sizeof warn, err,
 	                              sizeof err);
-	if (warn[0])
-		fprintf(stderr, "sss: %s%s", warn,
-		        warn[strlen(warn) - 1] == '\n' ? "" : "\n");
+	/* warnings: one line each */
+	for (char *line = warn; *line;) {
+		char *nl = strchr(line, '\n');
+		if (nl)
+			*nl = '\0';
+		if (*line)
+			say(stderr, "", line);
+		line = nl ? nl + 1 : line + strlen(line);
+	}
 	if (r) {
-		fprintf(stderr, "sss: %s\n", err);
+		say(stderr, "", err);
 		if (frames.frames != &single)
 			free(frames.frames);
 		return 2;
@@ -710,15 +741,21 @@ int main(int argc, char **argv)
 		} else if (a.resume && access(out, F_OK) == 0 &&
 		           complete_output(out, &po.exr, why, sizeof why)) {
 			skipped++;
-			if (!a.quiet)
-				printf("%s: exists, skipped (--resume)\n", out);
+			if (!a.quiet) {
+				put_clean(stdout, out);
+				printf(": exists, skipped (--resume)\n");
+			}
 			if (bar)
 				progress_bar(i + 1, frames.count, failed);
 			continue;
 		} else {
-			if (a.resume && access(out, F_OK) == 0)
-				fprintf(stderr, "sss: %s: exists but is not a complete "
-				        "output (%s); writing it again\n", out, why);
+			if (a.resume && access(out, F_OK) == 0) {
+				char line[sizeof why + 4096 + 128];
+				snprintf(line, sizeof line, "%s: exists but is not a "
+				         "complete output (%s); writing it again", out,
+				         why);
+				say(stderr, "", line);
+			}
 			bad = sss_process_exr(in, out, scene, &po, &t, err,
 			                      sizeof err) != SSS_OK;
 		}
@@ -726,10 +763,13 @@ int main(int argc, char **argv)
 			fputc('\r', stderr);
 		if (bad) {
 			failed++;
-			fprintf(stderr, "sss: error: %s\n", err);
+			say(stderr, "error: ", err);
 		} else if (!a.quiet) {
-			printf("%s -> %s: read %.3f s, sss %.3f s, write %.3f s\n", in,
-			       out, t.read, t.scatter, t.write);
+			put_clean(stdout, in);
+			fputs(" -> ", stdout);
+			put_clean(stdout, out);
+			printf(": read %.3f s, sss %.3f s, write %.3f s\n", t.read,
+			       t.scatter, t.write);
 			if (chosen)
 				tell_methods(scene, nmat, chosen, told);
 			fflush(stdout);

@@ -717,3 +717,67 @@ def test_openexr_channel_ceiling_refused_before_work(sss_cmd, blender_render,
         "32767 one file can hold" in proc.stderr, proc.stderr
     assert "->" not in proc.stdout
     only(tmp_path, "ceiling.exr")
+
+
+# ------------------------------------------- second round: messages
+
+def scene_with(blender_render, tmp_path, name, change):
+    scene = json.loads((blender_render / "scene.json").read_text())
+    change(scene)
+    path = tmp_path / name
+    path.write_text(json.dumps(scene))
+    return path
+
+
+def test_support_cap_past_int32_names_its_range(sss_cmd, blender_render,
+                                                tmp_path):
+    scene = scene_with(blender_render, tmp_path, "s.json",
+                       lambda s: s.update(max_support_px=2147483648))
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=2)
+    assert "2.14748e+09 is out of range (must be 1..2147483647)" in \
+        proc.stderr, proc.stderr
+
+
+def test_json_keys_match_strictly(sss_cmd, blender_render, tmp_path):
+    """"unit_scale\\u0000junk" is not unit_scale (cJSON's strings end at
+    the NUL): refused, with where it is."""
+    text = (blender_render / "scene.json").read_text()
+    scene = tmp_path / "s.json"
+    scene.write_text(text.replace("{", '{"unit_scale\\u0000junk": 1000, ',
+                                  1))
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=2)
+    assert "\\u0000" in proc.stderr and "line 1" in proc.stderr, proc.stderr
+
+
+def test_json_values_are_bounded(sss_cmd, blender_render, tmp_path):
+    """A 6 MB array took 248 MB in the parser; refused before parsing."""
+    scene = tmp_path / "s.json"
+    scene.write_text('{"junk": [' + "0," * 3000000 + '0]}')
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=2)
+    assert "more than 2097152 JSON values" in proc.stderr, proc.stderr
+
+
+def test_control_characters_in_names_are_shown_escaped(sss_cmd,
+                                                       blender_render,
+                                                       tmp_path):
+    """A material or layer name with ESC, CR or LF: printed as \\xNN, so
+    no terminal escape runs and no fake line can be made."""
+    evil = "Skin\x1b[31m\r\nsss: error: fake"
+
+    def rename(s):
+        s["materials"][0]["name"] = evil
+    scene = scene_with(blender_render, tmp_path, "s.json", rename)
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=0)
+    assert "Skin\\x1b[31m\\x0d\\x0asss: error: fake" in proc.stdout, \
+        proc.stdout
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o2.exr", "--scene", scene, "-l", evil, check=1)
+    for text in (proc.stdout, proc.stderr):
+        assert "\x1b" not in text and "\r" not in text
+        assert not any(line.startswith("sss: error: fake")
+                       for line in text.splitlines()), text
+    assert "\\x1b" in proc.stderr
