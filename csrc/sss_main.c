@@ -29,7 +29,8 @@ static const char usage_text[] =
 "Position are used when present.\n"
 "\n"
 "options:\n"
-"  -o, --output PATH       output file (#### pattern for sequences); written\n"
+"  -o, --output PATH       output file (#### pattern for sequences: every run\n"
+"                          of # is the frame number, \\# a literal #); written\n"
 "                          to a temporary file first, then renamed; only\n"
 "                          ever replaces a writable regular file that is\n"
 "                          neither the input nor the scene (not a device,\n"
@@ -339,18 +340,109 @@ static const char *parse_frames(const char *text, frame_list *out)
 	return why;
 }
 
-/* Replaces the run of '#' in pattern with the zero-padded frame number. */
+/* Whether pattern has a '#' that is not written "\#". */
+static int is_pattern(const char *pattern)
+{
+	for (const char *p = pattern; *p; p++) {
+		if (p[0] == '\\' && p[1] == '#')
+			p++;
+		else if (*p == '#')
+			return 1;
+	}
+	return 0;
+}
+
+/* Replaces every run of '#' in pattern with the frame number, zero-padded
+ * to the run's length ("o_##_###.exr", frame 7: "o_07_007.exr"); "\#"
+ * writes a literal '#'. 0, or -1 when out is too short. */
 static int expand(const char *pattern, int frame, char *out, size_t len)
 {
-	const char *hash = strchr(pattern, '#');
-	if (!hash)
-		return snprintf(out, len, "%s", pattern) < (int)len ? 0 : -1;
-	int width = 0;
-	while (hash[width] == '#')
-		width++;
-	int n = snprintf(out, len, "%.*s%0*d%s", (int)(hash - pattern), pattern,
-	                 width, frame, hash + width);
-	return n >= 0 && (size_t)n < len ? 0 : -1;
+	size_t at = 0;
+	for (const char *p = pattern; *p;) {
+		char num[32];
+		const char *piece = p;
+		size_t n = 1;
+		if (p[0] == '\\' && p[1] == '#') {
+			piece = "#";
+			p += 2;
+		} else if (*p == '#') {
+			int width = 0;
+			while (p[width] == '#')
+				width++;
+			snprintf(num, sizeof num, "%0*d", width > 20 ? 20 : width,
+			         frame);
+			piece = num;
+			n = strlen(num);
+			p += width;
+		} else {
+			p++;
+		}
+		if (at + n >= len)
+			return -1;
+		memcpy(out + at, piece, n);
+		at += n;
+	}
+	if (at >= len)
+		return -1;
+	out[at] = '\0';
+	return 0;
+}
+
+/* The existing input files of a sequence, sorted by identity, so that an
+ * output that is some other frame's input is found before any frame is
+ * written (frame 1 of "in_1###.exr" as output is frame 1001's input). */
+typedef struct frame_id {
+	dev_t dev;
+	ino_t ino;
+	int frame;
+} frame_id;
+
+static int frame_id_cmp(const void *a, const void *b)
+{
+	const frame_id *x = a, *y = b;
+	if (x->dev != y->dev)
+		return x->dev < y->dev ? -1 : 1;
+	if (x->ino != y->ino)
+		return x->ino < y->ino ? -1 : 1;
+	return 0;
+}
+
+/* 0, or -1 with what is wrong in err (nothing may be written then). */
+static int check_sequence(const char *in_pattern, const char *out_pattern,
+                          const frame_list *frames, char *err, size_t len)
+{
+	frame_id *ids = malloc((size_t)frames->count * sizeof *ids);
+	int n = 0, bad = 0;
+	char path[4096];
+	struct stat st;
+	if (!ids) {
+		snprintf(err, len, "out of memory checking %d frames",
+		         frames->count);
+		return -1;
+	}
+	for (int i = 0; i < frames->count; i++)
+		if (!expand(in_pattern, frames->frames[i], path, sizeof path) &&
+		    stat(path, &st) == 0)
+			ids[n++] = (frame_id){st.st_dev, st.st_ino, frames->frames[i]};
+	qsort(ids, (size_t)n, sizeof *ids, frame_id_cmp);
+	for (int i = 0; i < frames->count && !bad; i++) {
+		if (expand(out_pattern, frames->frames[i], path, sizeof path) ||
+		    stat(path, &st) != 0)
+			continue;
+		frame_id key = {st.st_dev, st.st_ino, 0};
+		const frame_id *hit = bsearch(&key, ids, (size_t)n, sizeof *ids,
+		                              frame_id_cmp);
+		if (hit) {
+			char other[4096];
+			expand(in_pattern, hit->frame, other, sizeof other);
+			snprintf(err, len, "frame %d's output %s is frame %d's input "
+			         "%s; nothing was written", frames->frames[i], path,
+			         hit->frame, other);
+			bad = 1;
+		}
+	}
+	free(ids);
+	return bad ? -1 : 0;
 }
 
 /* ------------------------------------------------- stopping mid-write */
@@ -640,8 +732,8 @@ int main(int argc, char **argv)
 	if (!a.scene)
 		return usage_error("%s", "missing --scene SCENE.json (camera and "
 		                         "materials)");
-	int in_seq = strchr(a.input, '#') != NULL;
-	int out_seq = strchr(a.output, '#') != NULL;
+	int in_seq = is_pattern(a.input);
+	int out_seq = is_pattern(a.output);
 	if (in_seq != out_seq)
 		return usage_error("%s", "INPUT and OUTPUT must both be #### "
 		                         "patterns, or neither");
@@ -685,6 +777,13 @@ int main(int argc, char **argv)
 		return 2;
 	}
 
+	if (in_seq && check_sequence(a.input, a.output, &frames, err,
+	                             sizeof err)) {
+		say(stderr, "error: ", err);
+		sss_scene_free(scene);
+		free(frames.frames);
+		return 2;
+	}
 	file_id scene_id = identify(a.scene);
 	catch_signals();
 	int failed = 0, skipped = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&

@@ -781,3 +781,32 @@ def test_control_characters_in_names_are_shown_escaped(sss_cmd,
         assert not any(line.startswith("sss: error: fake")
                        for line in text.splitlines()), text
     assert "\\x1b" in proc.stderr
+
+
+# ------------------------------------------- second round: frame patterns
+
+def test_every_run_of_hashes_and_a_literal_hash(sss_cmd, blender_render,
+                                                tmp_path):
+    for f in (1, 2):
+        os.symlink(blender_render / "render.exr", tmp_path / f"in_{f:02d}.exr")
+    run(sss_cmd, tmp_path / "in_##.exr", "--frames", "1-2", "-o",
+        str(tmp_path / "o_##_###") + "\\#.exr", "--scene",
+        blender_render / "scene.json", "-q", check=0)
+    assert sorted(p.name for p in tmp_path.glob("o_*")) == [
+        "o_01_001#.exr", "o_02_002#.exr"]
+
+
+def test_output_that_is_another_frames_input_is_refused_first(
+        sss_cmd, blender_render, tmp_path):
+    """-o in_1###.exr --frames 1,1001: frame 1's output is frame 1001's
+    input; said before any frame is written."""
+    for f in (1, 1001):
+        shutil.copy(blender_render / "render.exr", tmp_path / f"in_{f:04d}.exr")
+    before = (tmp_path / "in_1001.exr").read_bytes()
+    proc = run(sss_cmd, tmp_path / "in_####.exr", "--frames", "1,1001", "-o",
+               tmp_path / "in_1###.exr", "--scene",
+               blender_render / "scene.json", check=2)
+    assert "frame 1's output" in proc.stderr and "frame 1001's input" in \
+        proc.stderr, proc.stderr
+    assert (tmp_path / "in_1001.exr").read_bytes() == before
+    only(tmp_path, "in_0001.exr", "in_1001.exr")
