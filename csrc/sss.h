@@ -356,7 +356,8 @@ SSS_API sss_result sss_material_support(const sss_material *mat,
  * whose half-width is at most 64 px has every pixel as a tap whatever the
  * count (up to 129). On input *count is the capacity of the arrays
  * (weights has 3 * capacity floats); on output the number of taps
- * written. */
+ * written. A kernel more than 2^24 pixels wide (pixels_per_metre far past
+ * any image) is SSS_ERR_INVALID_ARGUMENT. */
 SSS_API sss_result sss_kernel_1d(const sss_material *mat,
                                  double pixels_per_metre, int32_t taps,
                                  float *offsets, float *weights,
