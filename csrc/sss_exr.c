@@ -1050,13 +1050,15 @@ static sss_result check_memory(const sss_exr *exr, const sss_exr_options *o,
 	}
 	if (bytes <= limit)
 		return SSS_OK;
+	int gib = limit >= 1073741824.0;
+	double unit = gib ? 1073741824.0 : 1048576.0;
 	return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: its %dx%d pixels x %lld "
-	             "channels take %.2f GiB decoded, more than the limit of "
-	             "%.2f GiB%s (raise it with sss --max-memory, or "
+	             "channels take %.2f %s decoded, more than the limit of "
+	             "%.2f %s%s (raise it with sss --max-memory, or "
 	             "sss_exr_options.max_bytes)", exr->path, exr->width,
-	             exr->height, (long long)channels, bytes / 1073741824.0,
-	             limit / 1073741824.0, machine ? ", the machine's memory"
-	                                           : "");
+	             exr->height, (long long)channels, bytes / unit,
+	             gib ? "GiB" : "MiB", limit / unit, gib ? "GiB" : "MiB",
+	             machine ? ", the machine's memory" : "");
 }
 
 /* Allocates every pass and decodes every part into them. */
