@@ -12,6 +12,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -659,6 +660,17 @@ static void test_options(void)
 	sss_exr_options_default(&o);
 	o.num_threads = -1;
 	CHECK_STATUS("exr.opt.threads", SSS_ERR_INVALID_ARGUMENT,
+	             sss_exr_read(p, &o, &exr, errbuf, sizeof errbuf));
+	sss_exr_options_default(&o);
+	o.max_channels = 0;
+	CHECK_STATUS("exr.opt.max_channels", SSS_ERR_INVALID_ARGUMENT,
+	             sss_exr_read(p, &o, &exr, errbuf, sizeof errbuf));
+	/* ABI 8's struct, without max_channels and max_bytes: still read,
+	 * with their defaults (a missing file is then the error). */
+	sss_exr_options_default(&o);
+	o.struct_size = (uint32_t)offsetof(sss_exr_options, max_channels);
+	o.max_channels = 0; /* past ABI 8's end: not read */
+	CHECK_STATUS("exr.opt.abi8", SSS_ERR_IO,
 	             sss_exr_read(p, &o, &exr, errbuf, sizeof errbuf));
 	CHECK_STATUS("exr.arg.path", SSS_ERR_INVALID_ARGUMENT,
 	             sss_exr_read(NULL, NULL, &exr, errbuf, sizeof errbuf));
