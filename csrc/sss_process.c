@@ -149,6 +149,11 @@ sss_result sss_process_exr(const char *in, const char *out,
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "%s: output is the input file; refusing to "
 		                 "overwrite it", in);
+	/* The output can be written (its folder takes a new file): said
+	 * before the frame is read and scattered, not after. */
+	sss_result ok = sss_exr_check_output(out, err, errlen);
+	if (ok)
+		return ok;
 
 	sss_timings t = {0, 0, 0};
 	sss_exr *exr = NULL;

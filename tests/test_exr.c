@@ -1966,6 +1966,28 @@ static void test_progress(void)
 	      "%d calls, stage %d, last %g", seen.n, stage, last);
 }
 
+/* An output folder that takes no new file is said before the frame is
+ * read or scattered (procfs: not even root creates a file there). */
+static void test_unwritable_folder_first(void)
+{
+	char err[512];
+	sss_scene *scene = NULL;
+	sss_scene_load("tests/data/blender_8x8.json", &scene, NULL, 0, err,
+	               sizeof err);
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	opt.progress_fn = on_progress;
+	seen.n = 0;
+	CHECK_STATUS("process.folder", SSS_ERR_IO,
+	             sss_process_exr("tests/data/blender_8x8.exr",
+	                             "/proc/sss_out.exr", scene, &opt, NULL, err,
+	                             sizeof err));
+	CHECK("process.folder.first", seen.n == 0 &&
+	      file_contains(err, "its folder /proc is not writable"),
+	      "%d progress calls; %s", seen.n, err);
+	sss_scene_free(scene);
+}
+
 int main(void)
 {
 	snprintf(tmpdir, sizeof tmpdir, "/tmp/sss_exr_XXXXXX");
@@ -1989,6 +2011,7 @@ int main(void)
 	test_uint_exact();
 	test_write_safety();
 	test_progress();
+	test_unwritable_folder_first();
 	cleanup(tmpdir);
 	return tu_finish("test_exr");
 }
