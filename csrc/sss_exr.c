@@ -567,6 +567,12 @@ static sss_result group_channels(sss_exr *exr, int32_t max_channels,
 		if (rv != EXR_ERR_SUCCESS)
 			return exr_fail(errbuf, errbuf_len, exr->path, "reading the "
 			                "channel list", rv, &exr->io);
+		/* Decoding counts a part's channels in 16 bits too. */
+		if (cl->num_channels > sss__exr_max_channels())
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: part %d has %d "
+			             "channels, more than the %d the OpenEXR in use "
+			             "decodes in one part", exr->path, part,
+			             cl->num_channels, sss__exr_max_channels());
 		total += cl->num_channels;
 	}
 	/* From the header, before anything is allocated per channel. */
