@@ -187,6 +187,33 @@ def test_multilayer_exr_output_keeps_every_pass(blend, tmp_path):
     assert np.abs(composite - sss).max() < 1e-3
 
 
+def test_layer_named_as_another_layers_result_is_refused(blend, tmp_path):
+    """A multilayer EXR output gets SSS-NAME for view layer NAME's result:
+    a view layer already called that would be replaced, so the frame
+    fails with the reason (as the library refuses one named SSS)."""
+    scene = open_scene(blend, tmp_path)
+    compat.set_multilayer_exr(scene.render.image_settings)
+    scene.view_layers.new("Second")
+    scene.view_layers.new("SSS-Second")
+    tree = compat.compositor_tree(scene, create=True)
+    out = tree.nodes.new("CompositorNodeOutputFile")
+    compat.set_file_output(out, str(tmp_path / "fo"), "PNG", '16')
+    names = ["Second", "SSS-Second"]  # both shown, so both rendered
+    sockets = compat.file_output_inputs(out, ["a", "b"])
+    for name, socket in zip(names, sockets):
+        node = tree.nodes.new("CompositorNodeRLayers")
+        node.layer = name
+        tree.links.new(node.outputs["Image"], socket)
+    scene.sss.enabled = True
+    scene.frame_start = scene.frame_end = 1
+    scene.render.filepath = str(tmp_path / "frame_####")
+    render_flow.last_error = None
+    bpy.ops.render.render(animation=True)
+    render_flow.remove_leftovers()
+    assert "view layer 'SSS-Second' has the name of view layer 'Second''s " \
+        "SSS result" in str(render_flow.last_error)
+
+
 def test_switch_off_is_plain_cycles(blend, tmp_path):
     scene = open_scene(blend, tmp_path)
     with_addon = render_still(scene, tmp_path / "a")
