@@ -356,7 +356,8 @@ SSS_API sss_result sss_material_support(const sss_material *mat,
  * whose half-width is at most 64 px has every pixel as a tap whatever the
  * count (up to 129). On input *count is the capacity of the arrays
  * (weights has 3 * capacity floats); on output the number of taps
- * written. */
+ * written. A kernel more than 2^24 pixels wide (pixels_per_metre far past
+ * any image) is SSS_ERR_INVALID_ARGUMENT. */
 SSS_API sss_result sss_kernel_1d(const sss_material *mat,
                                  double pixels_per_metre, int32_t taps,
                                  float *offsets, float *weights,
@@ -507,12 +508,22 @@ typedef struct sss_exr_options {
 	 * round of chunks written. NULL = not told. */
 	void (*progress_fn)(double done, void *user);
 	void *progress_user;
+	/* reading, checked from the header before any pixel is allocated:
+	 * the most channels (default 4096; Blender's renders hold tens to a
+	 * few hundred) and the most bytes the decoded image may take (width
+	 * x height x channels x 4, uint channels 8; default 0: the machine's
+	 * physical memory). A struct_size without these fields (ABI 8) reads
+	 * as the defaults. */
+	int32_t max_channels;
+	int64_t max_bytes;
 } sss_exr_options;
 
 SSS_API void sss_exr_options_default(sss_exr_options *opt);
 
 /* Reads a scanline or tiled EXR (level 0), half, float or uint channels
- * (converted to float), any compression OpenEXR 3.1's C API decodes (all
+ * (converted to float; uint ones also kept in their own type for
+ * writing), names split from the end as Blender splits them (layer, then
+ * pass and component after the last two dots), any compression OpenEXR 3.1's C API decodes (all
  * but DWAA/DWAB: SSS_ERR_UNSUPPORTED). Every part of a multi-part file is
  * read (Blender 5.0 saves a part per pass); the parts must share one data
  * window, and a channel not named under its part's name is put under it.
@@ -549,7 +560,9 @@ SSS_API sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
                                          char *errbuf, size_t errbuf_len);
 
 /* Adds (or replaces) a float pass, copying `data` (width x height x
- * strlen(components) floats, interleaved, packed). */
+ * strlen(components) floats, interleaved, packed). The layer may hold
+ * dots ("SSS-ViewLayer.001"); the pass may not (names are read back
+ * split from the end). */
 SSS_API sss_result sss_exr_add_pass(sss_exr *exr, const char *layer,
                                     const char *pass, const char *components,
                                     const float *data, char *errbuf,
@@ -560,19 +573,25 @@ SSS_API sss_result sss_exr_add_pass(sss_exr *exr, const char *layer,
  * writable regular file. Refused, naming the path and what it is: a
  * directory, FIFO, socket or device (`-o /dev/null` would otherwise
  * replace the device with a file), a symbolic link (it would be replaced
- * by a file, not written through: name its target instead) and a file
- * without write permission (read-only outputs are kept). */
+ * by a file, not written through: name its target instead), a file
+ * without write permission (read-only outputs are kept) and a folder
+ * that takes no new file (a temporary is created there and removed). */
 SSS_API sss_result sss_exr_check_output(const char *path, char *errbuf,
                                         size_t errbuf_len);
 
 /* Writes every pass as one single-part scanline file (original channels
  * keep their pixel type, so a round trip is lossless with NONE, RLE, ZIPS,
  * ZIP and PIZ) plus the input's header attributes, to a temporary file
- * beside `path` ("<dir>/.<name>.tmp-<pid>-<n>", held under an exclusive
- * lock while written) that is renamed over `path` only once complete.
- * Temporaries an earlier, stopped writer left for `path` are removed
- * first; one whose lock is held (a live writer, on this host or another
- * sharing the folder) is never touched. Refuses what
+ * beside `path` ("<dir>/.<name>.tmp-<pid>-<id><check>", the check a hash
+ * of the name before it; held under an exclusive lock while written)
+ * that is renamed over `path` only once complete; a replaced file's
+ * permission bits are kept (its hard links are not: the rename gives the
+ * name a new file). Temporaries an earlier, stopped writer left for
+ * `path` are removed first, only those with a valid check and never the
+ * file being read; one whose lock is held (a live writer, on this host or
+ * another sharing the folder) is never touched. Refuses an image of more
+ * channels than the OpenEXR in use can write (OpenEXRCore 3.1: 32767) and
+ * what
  * sss_exr_check_output refuses and the file the image was read from (by
  * name, link or inode). */
 SSS_API sss_result sss_exr_write(const sss_exr *exr, const char *path,

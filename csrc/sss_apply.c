@@ -541,6 +541,14 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	    (r = check_output("diffuse light", out_diffuse_light, p, w, h,
 	                      errbuf, errbuf_len)))
 		return r;
+	if (out_combined && out_diffuse_light) {
+		const char *alo, *ahi, *blo, *bhi;
+		sss__span(out_combined, &alo, &ahi);
+		sss__span(out_diffuse_light, &blo, &bhi);
+		if (alo < bhi && blo < ahi)
+			return FAILX(SSS_ERR_INVALID_ARGUMENT, "outputs combined and "
+			             "diffuse light share memory; each needs its own");
+	}
 	if ((r = sss__projection_make(cam, w, h, &(sss__projection){0}, errbuf,
 	                              errbuf_len)))
 		return r;

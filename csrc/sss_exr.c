@@ -36,6 +36,10 @@ typedef struct xchan {
 	uint8_t p_linear; /* perceptual hint, kept for lossy codecs */
 	int32_t index;    /* position among the source's channels, counted
 	                   * over its parts in order; -1: added */
+	uint32_t *raw;    /* a uint channel's own values (width x height),
+	                   * which a float holds exactly only up to 2^24:
+	                   * written back while the float view still reads
+	                   * the same; NULL for other types */
 } xchan;
 
 typedef struct xpass {
@@ -215,6 +219,8 @@ void sss_exr_options_default(sss_exr_options *opt)
 	opt->max_pixels = (int64_t)1 << 28;
 	opt->compression = SSS_EXR_ZIP;
 	opt->num_threads = 0;
+	opt->max_channels = 4096;
+	opt->max_bytes = 0;
 }
 
 static sss_result get_options(const sss_exr_options *user, sss_exr_options *o,
@@ -223,11 +229,15 @@ static sss_result get_options(const sss_exr_options *user, sss_exr_options *o,
 	sss_exr_options_default(o);
 	if (!user)
 		return SSS_OK;
-	if (user->struct_size != sizeof *user)
+	/* ABI 8's struct ended before max_channels: its fields are read,
+	 * the newer ones keep their defaults. */
+	size_t old = offsetof(sss_exr_options, max_channels);
+	if (user->struct_size != sizeof *user && user->struct_size != old)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: struct_size "
 		             "%u, expected %zu (use sss_exr_options_default)",
 		             user->struct_size, sizeof *user);
-	*o = *user;
+	memcpy(o, user, user->struct_size);
+	o->struct_size = sizeof *o;
 	if (o->max_width < 1 || o->max_height < 1 || o->max_pixels < 1)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: max_width %d, "
 		             "max_height %d and max_pixels %lld must be >= 1",
@@ -238,6 +248,11 @@ static sss_result get_options(const sss_exr_options *user, sss_exr_options *o,
 	if (o->num_threads < 0 || o->num_threads > 256)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: num_threads "
 		             "%d must be 0 (all cores) .. 256", o->num_threads);
+	if (o->max_channels < 1 || o->max_bytes < 0)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "EXR options: max_channels "
+		             "%d must be >= 1 and max_bytes %lld >= 0 (0: the "
+		             "machine's memory)", o->max_channels,
+		             (long long)o->max_bytes);
 	return SSS_OK;
 }
 
@@ -271,8 +286,10 @@ static char *dup_n(const char *s, size_t n)
 
 static void pass_free(xpass *p)
 {
-	for (int32_t k = 0; k < p->count; k++)
+	for (int32_t k = 0; k < p->count; k++) {
 		free(p->chan[k].name);
+		free(p->chan[k].raw);
+	}
 	free(p->chan);
 	free(p->components);
 	free(p->data);
@@ -390,8 +407,11 @@ static int make_components(xpass *p)
 	return 0;
 }
 
-/* Splits a channel name: component after the last dot; before it, layer
- * up to the first dot and the pass, or (no second dot) just the pass. */
+/* Splits a channel name from the end, as Blender does: the component
+ * after the last dot, the pass between the dot before it and that one,
+ * and the layer is all before (Blender's own copies of a view layer are
+ * "ViewLayer.001": "ViewLayer.001.DiffDir.R" is that layer's DiffDir.R).
+ * One dot: just the pass ("DiffDir.R", File Output node naming). */
 static void split_name(const char *name, const char **layer, size_t *layer_len,
                        const char **pass, size_t *pass_len, const char **comp)
 {
@@ -403,12 +423,14 @@ static void split_name(const char *name, const char **layer, size_t *layer_len,
 		return;
 	}
 	*comp = last + 1;
-	const char *first = memchr(name, '.', (size_t)(last - name));
-	if (first) {
+	const char *mid = last;
+	while (mid > name && mid[-1] != '.')
+		mid--;
+	if (mid > name) {
 		*layer = name;
-		*layer_len = (size_t)(first - name);
-		*pass = first + 1;
-		*pass_len = (size_t)(last - first - 1);
+		*layer_len = (size_t)(mid - 1 - name);
+		*pass = mid;
+		*pass_len = (size_t)(last - mid);
 	} else {
 		*pass = name;
 		*pass_len = (size_t)(last - name);
@@ -436,10 +458,49 @@ static char *qualified_name(const sss_exr *exr, int part, const char *name)
 	return q;
 }
 
+/* The passes by (layer, pass) while channels are grouped: open
+ * addressing over pass numbers, so that grouping stays linear in the
+ * channel count (a scan per channel took 32 s for 65k channels). */
+typedef struct pass_index {
+	int32_t *slot; /* pass number, -1 empty */
+	size_t mask;   /* slots - 1, slots a power of two */
+} pass_index;
+
+static size_t pass_hash(const char *layer, size_t layer_len, const char *pass,
+                        size_t pass_len)
+{
+	size_t h = 1469598103934665603u & SIZE_MAX;
+	for (size_t i = 0; i < layer_len; i++)
+		h = (h ^ (unsigned char)layer[i]) * 1099511628211u;
+	h = (h ^ 0xff) * 1099511628211u; /* "a.b" + "c" is not "a" + "b.c" */
+	for (size_t i = 0; i < pass_len; i++)
+		h = (h ^ (unsigned char)pass[i]) * 1099511628211u;
+	return h;
+}
+
+/* The slot of (layer, pass): its pass, or the empty slot it would take. */
+static size_t pass_slot(const sss_exr *exr, const pass_index *ix,
+                        const char *layer, size_t layer_len,
+                        const char *pass, size_t pass_len)
+{
+	size_t i = pass_hash(layer, layer_len, pass, pass_len) & ix->mask;
+	for (;; i = (i + 1) & ix->mask) {
+		int32_t j = ix->slot[i];
+		if (j < 0)
+			return i;
+		const xpass *q = &exr->passes[j];
+		if (strlen(q->layer) == layer_len &&
+		    memcmp(q->layer, layer, layer_len) == 0 &&
+		    strlen(q->pass) == pass_len &&
+		    memcmp(q->pass, pass, pass_len) == 0)
+			return i;
+	}
+}
+
 /* Source channel `index` (entry e of part `part`) into its pass. */
-static sss_result add_channel(sss_exr *exr, const exr_attr_chlist_entry_t *e,
-                              int part, int32_t index, char *errbuf,
-                              size_t errbuf_len)
+static sss_result add_channel(sss_exr *exr, pass_index *ix,
+                              const exr_attr_chlist_entry_t *e, int part,
+                              int32_t index, char *errbuf, size_t errbuf_len)
 {
 	const char *source = e->name.str;
 	if (e->x_sampling != 1 || e->y_sampling != 1)
@@ -457,19 +518,13 @@ static sss_result add_channel(sss_exr *exr, const exr_attr_chlist_entry_t *e,
 	size_t layer_len, pass_len;
 	split_name(name, &layer, &layer_len, &pass, &pass_len, &comp);
 
-	xpass *p = NULL;
-	for (int32_t j = 0; j < exr->pass_count && !p; j++) {
-		xpass *q = &exr->passes[j];
-		if (strlen(q->layer) == layer_len &&
-		    memcmp(q->layer, layer, layer_len) == 0 &&
-		    strlen(q->pass) == pass_len &&
-		    memcmp(q->pass, pass, pass_len) == 0)
-			p = q;
-	}
+	size_t slot = pass_slot(exr, ix, layer, layer_len, pass, pass_len);
+	xpass *p = ix->slot[slot] >= 0 ? &exr->passes[ix->slot[slot]] : NULL;
 	if (!p && !(p = append_pass(exr, layer, layer_len, pass, pass_len))) {
 		free(name);
 		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", exr->path);
 	}
+	ix->slot[slot] = (int32_t)(p - exr->passes);
 
 	/* Insertion in canonical order; names map to (layer, pass, component)
 	 * one way only except for odd leading dots, so a clash (also of two
@@ -493,7 +548,7 @@ static sss_result add_channel(sss_exr *exr, const exr_attr_chlist_entry_t *e,
 	memmove(&p->chan[at + 1], &p->chan[at],
 	        (size_t)(p->count - at) * sizeof *p->chan);
 	p->chan[at] = (xchan){name, comp, (int32_t)e->pixel_type, e->p_linear,
-	                      index};
+	                      index, NULL};
 	p->count++;
 	return SSS_OK;
 }
@@ -501,23 +556,50 @@ static sss_result add_channel(sss_exr *exr, const exr_attr_chlist_entry_t *e,
 /* Groups the source's channels, part by part, into passes (in
  * channel-list order), components sorted canonically. Pixel buffers are
  * allocated later. */
-static sss_result group_channels(sss_exr *exr, char *errbuf,
-                                 size_t errbuf_len)
+static sss_result group_channels(sss_exr *exr, int32_t max_channels,
+                                 char *errbuf, size_t errbuf_len)
 {
 	int32_t index = 0;
+	int64_t total = 0;
 	for (int part = 0; part < exr->part_count; part++) {
 		const exr_attr_chlist_t *cl = NULL;
 		exr_result_t rv = exr_get_channels(exr->header, part, &cl);
 		if (rv != EXR_ERR_SUCCESS)
 			return exr_fail(errbuf, errbuf_len, exr->path, "reading the "
 			                "channel list", rv, &exr->io);
-		for (int i = 0; i < cl->num_channels; i++, index++) {
-			sss_result r = add_channel(exr, &cl->entries[i], part, index,
-			                           errbuf, errbuf_len);
-			if (r)
-				return r;
-		}
+		/* Decoding counts a part's channels in 16 bits too. */
+		if (cl->num_channels > sss__exr_max_channels())
+			return FAILX(SSS_ERR_UNSUPPORTED, "%s: part %d has %d "
+			             "channels, more than the %d the OpenEXR in use "
+			             "decodes in one part", exr->path, part,
+			             cl->num_channels, sss__exr_max_channels());
+		total += cl->num_channels;
 	}
+	/* From the header, before anything is allocated per channel. */
+	if (total > max_channels)
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: %lld channels, more "
+		             "than the limit of %d (raise it with sss "
+		             "--max-channels, or sss_exr_options.max_channels)",
+		             exr->path, (long long)total, max_channels);
+	pass_index ix = {NULL, 0};
+	size_t slots = 16;
+	while (slots < 2 * (size_t)total)
+		slots *= 2;
+	if (!(ix.slot = malloc(slots * sizeof *ix.slot)))
+		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", exr->path);
+	memset(ix.slot, 0xff, slots * sizeof *ix.slot);
+	ix.mask = slots - 1;
+	sss_result r = SSS_OK;
+	for (int part = 0; part < exr->part_count && !r; part++) {
+		const exr_attr_chlist_t *cl = NULL;
+		exr_get_channels(exr->header, part, &cl);
+		for (int i = 0; i < cl->num_channels && !r; i++, index++)
+			r = add_channel(exr, &ix, &cl->entries[i], part, index, errbuf,
+			                errbuf_len);
+	}
+	free(ix.slot);
+	if (r)
+		return r;
 	for (int32_t j = 0; j < exr->pass_count; j++)
 		if (make_components(&exr->passes[j]))
 			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory",
@@ -527,10 +609,12 @@ static sss_result group_channels(sss_exr *exr, char *errbuf,
 
 /* ------------------------------------------------------------- decoding */
 
-/* Where one source channel lands: its pass's buffer and component. */
+/* Where one source channel lands: its pass's buffer and component, and
+ * a uint channel's own plane (decoded there, then converted). */
 typedef struct chan_ref {
 	float *data;
 	int32_t count, k;
+	uint32_t *raw;
 } chan_ref;
 
 typedef struct read_job {
@@ -604,6 +688,15 @@ static void point_channels(const read_job *job, exr_decode_pipeline_t *dec,
 	for (int c = 0; c < dec->channel_count; c++) {
 		exr_coding_channel_info_t *ch = &dec->channels[c];
 		const chan_ref *r = &job->ref[c];
+		if (r->raw) {
+			ch->decode_to_ptr = (uint8_t *)(r->raw + (size_t)y0 *
+			                    (size_t)exr->width + (size_t)x0);
+			ch->user_pixel_stride = (int32_t)sizeof *r->raw;
+			ch->user_line_stride = exr->width * (int32_t)sizeof *r->raw;
+			ch->user_bytes_per_element = (int16_t)sizeof *r->raw;
+			ch->user_data_type = EXR_PIXEL_UINT;
+			continue;
+		}
 		size_t at = ((size_t)y0 * (size_t)exr->width + (size_t)x0) *
 		            (size_t)r->count + (size_t)r->k;
 		ch->decode_to_ptr = (uint8_t *)(r->data + at);
@@ -926,6 +1019,10 @@ static sss_result decode_part(sss_exr *exr, const sss_exr_options *o,
 		snprintf(where, sizeof where, "part '%.30s', ", name);
 	if (job.rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED)
 		snprintf(what, sizeof what, "decoding the pixels");
+	else if (job.rv == EXR_ERR_OUT_OF_MEMORY)
+		snprintf(what, sizeof what, "out of memory while decoding (%sthe "
+		         "%s at y %d)", where, job.tiled ? "tile" : "scanlines",
+		         exr->data_window.min.y + job.bad_y);
 	else if (job.tiled)
 		snprintf(what, sizeof what, "truncated or corrupt (%sthe tile at "
 		         "x %d, y %d)", where, exr->data_window.min.x + job.bad_x,
@@ -936,6 +1033,40 @@ static sss_result decode_part(sss_exr *exr, const sss_exr_options *o,
 	return exr_fail(errbuf, errbuf_len, path, what, job.rv, &exr->io);
 }
 
+/* The memory the decoded image takes, checked before it is allocated:
+ * at most max_bytes, or the machine's physical memory (a 5 MB file of
+ * 646 channels took 2.8 GB; at the default pixel cap, 700 GB). */
+static sss_result check_memory(const sss_exr *exr, const sss_exr_options *o,
+                               char *errbuf, size_t errbuf_len)
+{
+	double bytes = 0.0;
+	int64_t channels = 0;
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		for (int32_t k = 0; k < exr->passes[j].count; k++) {
+			channels++;
+			bytes += exr->passes[j].chan[k].type == EXR_PIXEL_UINT ? 8 : 4;
+		}
+	bytes *= (double)exr->width * (double)exr->height;
+	double limit = (double)o->max_bytes;
+	int machine = o->max_bytes == 0;
+	if (machine) {
+		long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+		limit = pages > 0 && size > 0 ? (double)pages * (double)size
+		                              : 9.2e18;
+	}
+	if (bytes <= limit)
+		return SSS_OK;
+	int gib = limit >= 1073741824.0;
+	double unit = gib ? 1073741824.0 : 1048576.0;
+	return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: its %dx%d pixels x %lld "
+	             "channels take %.2f %s decoded, more than the limit of "
+	             "%.2f %s%s (raise it with sss --max-memory, or "
+	             "sss_exr_options.max_bytes)", exr->path, exr->width,
+	             exr->height, (long long)channels, bytes / unit,
+	             gib ? "GiB" : "MiB", limit / unit, gib ? "GiB" : "MiB",
+	             machine ? ", the machine's memory" : "");
+}
+
 /* Allocates every pass and decodes every part into them. */
 static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
                                char *errbuf, size_t errbuf_len)
@@ -943,6 +1074,9 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 	const char *path = exr->path;
 	size_t npix = (size_t)exr->width * (size_t)exr->height;
 	int32_t channels = 0;
+	sss_result mr = check_memory(exr, o, errbuf, errbuf_len);
+	if (mr)
+		return mr;
 	for (int32_t j = 0; j < exr->pass_count; j++) {
 		xpass *p = &exr->passes[j];
 		channels += p->count;
@@ -964,9 +1098,17 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 	if (!ref)
 		return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
 	for (int32_t j = 0; j < exr->pass_count; j++)
-		for (int32_t k = 0; k < exr->passes[j].count; k++)
-			ref[exr->passes[j].chan[k].index] =
-				(chan_ref){exr->passes[j].data, exr->passes[j].count, k};
+		for (int32_t k = 0; k < exr->passes[j].count; k++) {
+			xchan *ch = &exr->passes[j].chan[k];
+			if (ch->type == EXR_PIXEL_UINT &&
+			    !(ch->raw = calloc(npix, sizeof *ch->raw))) {
+				free(ref);
+				return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory "
+				             "for channel '%s'", path, ch->name);
+			}
+			ref[ch->index] = (chan_ref){exr->passes[j].data,
+			                            exr->passes[j].count, k, ch->raw};
+		}
 	sss_result r = SSS_OK;
 	int32_t first = 0;
 	for (int part = 0; part < exr->part_count && !r; part++) {
@@ -981,6 +1123,15 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 			first += cl->num_channels;
 	}
 	free(ref);
+	/* uint channels into their float view (exact up to 2^24). */
+	for (int32_t j = 0; j < exr->pass_count && !r; j++) {
+		xpass *p = &exr->passes[j];
+		for (int32_t k = 0; k < p->count; k++)
+			if (p->chan[k].raw)
+				for (size_t i = 0; i < npix; i++)
+					p->data[i * (size_t)p->count + (size_t)k] =
+						(float)p->chan[k].raw[i];
+	}
 	return r;
 }
 
@@ -1043,7 +1194,8 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 			r = exr_fail(errbuf, errbuf_len, path, "not a readable "
 			             "OpenEXR file", rv, &exr->io);
 	} else if (!(r = read_header(exr, &o, errbuf, errbuf_len)) &&
-	           !(r = group_channels(exr, errbuf, errbuf_len))) {
+	           !(r = group_channels(exr, o.max_channels, errbuf,
+	                                errbuf_len))) {
 		r = decode_image(exr, &o, errbuf, errbuf_len);
 	}
 	/* The header stays in memory for sss_exr_write; the file is done. */
@@ -1137,6 +1289,25 @@ int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix)
 	return found;
 }
 
+int64_t sss__exr_channel_count(const sss_exr *exr)
+{
+	int64_t n = 0;
+	for (int32_t j = 0; j < exr->pass_count; j++)
+		n += exr->passes[j].count;
+	return n;
+}
+
+/* OpenEXRCore 3.1 holds a part's channel count in the coding pipelines'
+ * int16_t channel_count: past 32767 the chunks were written empty or
+ * scrambled with exit 0. The type of that field says the ceiling. */
+int32_t sss__exr_max_channels(void)
+{
+	exr_encode_pipeline_t e;
+	(void)e;
+	return sizeof e.channel_count >= 4 ? INT32_MAX
+	       : (int32_t)((1L << (8 * sizeof e.channel_count - 1)) - 1);
+}
+
 /* ------------------------------------------------------------ add pass */
 
 sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
@@ -1151,13 +1322,11 @@ sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
 		                                          : "no components");
 	layer = layer ? layer : "";
 	pass = pass ? pass : "";
-	/* Names must read back as the same layer and pass (split_name). */
-	if (strchr(layer, '.'))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "layer name '%s' must not "
-		             "contain a dot", layer);
-	if (!layer[0] && strchr(pass, '.'))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass name '%s' contains a "
-		             "dot, which needs a layer name", pass);
+	/* Names must read back as the same layer and pass (split_name reads
+	 * from the end: a layer may hold dots, a pass may not). */
+	if (strchr(pass, '.'))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass name '%s' must not "
+		             "contain a dot", pass);
 	size_t n = strlen(components);
 	if (strlen(layer) + strlen(pass) + 3 > MAX_NAME)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "layer and pass names "
@@ -1212,7 +1381,7 @@ sss_result sss_exr_add_pass(sss_exr *exr, const char *layer, const char *pass,
 		else
 			snprintf(name, len, "%c", c);
 		np.chan[k] = (xchan){name, name + strlen(name) - 1,
-		                     EXR_PIXEL_FLOAT, 0, -1};
+		                     EXR_PIXEL_FLOAT, 0, -1, NULL};
 	}
 	ok = ok && make_components(&np) == 0;
 	xpass *slot = find_pass(exr, layer, pass);
@@ -1451,9 +1620,15 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 			            (size_t)r->k;
 			if (ch->data_type == EXR_PIXEL_UINT && stage) {
 				uint32_t *dst = stage + (size_t)u++ * plane;
-				for (size_t i = 0; i < plane; i++)
-					dst[i] = float_to_uint_sat(
-						r->data[at + i * (size_t)r->count]);
+				const uint32_t *raw = r->raw ? r->raw + y0 *
+				                      (size_t)exr->width : NULL;
+				/* The channel's own value while its float view still
+				 * reads as it did: above 2^24 a float is not exact. */
+				for (size_t i = 0; i < plane; i++) {
+					float f = r->data[at + i * (size_t)r->count];
+					dst[i] = raw && f == (float)raw[i]
+					         ? raw[i] : float_to_uint_sat(f);
+				}
 				ch->encode_from_ptr = (const uint8_t *)dst;
 				ch->user_pixel_stride = (int32_t)sizeof *dst;
 				ch->user_line_stride = exr->width * (int32_t)sizeof *dst;
@@ -1487,6 +1662,17 @@ static void encode_slots(void *arg, int32_t s0, int32_t s1)
 	}
 }
 
+typedef struct named_chan {
+	const char *name;
+	chan_ref ref;
+} named_chan;
+
+static int named_cmp(const void *a, const void *b)
+{
+	return strcmp(((const named_chan *)a)->name,
+	              ((const named_chan *)b)->name);
+}
+
 static exr_result_t encode_chunks(exr_context_t c, int part,
                                   const sss_exr *exr,
                                   const sss_exr_options *o, int32_t *bad_y)
@@ -1502,8 +1688,7 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 	if (lines < 1 || cl->num_channels < 1)
 		return EXR_ERR_INVALID_ARGUMENT;
 	int32_t chunks = (int32_t)(((int64_t)exr->height + lines - 1) / lines);
-	int32_t slots = threads > 0 ? threads
-	                            : (int32_t)sysconf(_SC_NPROCESSORS_ONLN);
+	int32_t slots = threads > 0 ? threads : sss__cpu_count();
 	slots = slots < 1 ? 1 : slots > chunks ? chunks : slots;
 
 	write_job job = {.ctxt = c, .part = part, .exr = exr};
@@ -1525,19 +1710,34 @@ static exr_result_t encode_chunks(exr_context_t c, int part,
 			rv = EXR_ERR_OUT_OF_MEMORY;
 	}
 
-	/* The library sorted the channel list; find each one's pass. */
+	/* The library sorted the channel list; find each one's pass, by
+	 * binary search over our channels sorted the same way (a scan per
+	 * channel was quadratic in the channel count). */
+	named_chan *by_name = rv == EXR_ERR_SUCCESS
+	                      ? malloc((size_t)cl->num_channels * sizeof *by_name)
+	                      : NULL;
+	int32_t nb = 0;
+	if (rv == EXR_ERR_SUCCESS && !by_name)
+		rv = EXR_ERR_OUT_OF_MEMORY;
+	for (int32_t j = 0; by_name && j < exr->pass_count; j++)
+		for (int32_t k = 0; k < exr->passes[j].count &&
+		                    nb < cl->num_channels; k++)
+			by_name[nb++] = (named_chan){exr->passes[j].chan[k].name,
+			                             {exr->passes[j].data,
+			                              exr->passes[j].count, k,
+			                              exr->passes[j].chan[k].raw}};
+	if (by_name)
+		qsort(by_name, (size_t)nb, sizeof *by_name, named_cmp);
 	for (int i = 0; rv == EXR_ERR_SUCCESS && i < cl->num_channels; i++) {
-		const char *name = cl->entries[i].name.str;
-		for (int32_t j = 0; j < exr->pass_count && !ref[i].data; j++)
-			for (int32_t k = 0; k < exr->passes[j].count; k++)
-				if (strcmp(exr->passes[j].chan[k].name, name) == 0) {
-					ref[i] = (chan_ref){exr->passes[j].data,
-					                    exr->passes[j].count, k};
-					break;
-				}
-		if (!ref[i].data)
+		named_chan key = {cl->entries[i].name.str, {NULL, 0, 0, NULL}};
+		const named_chan *hit = bsearch(&key, by_name, (size_t)nb,
+		                                sizeof *by_name, named_cmp);
+		if (!hit)
 			rv = EXR_ERR_INVALID_ARGUMENT;
+		else
+			ref[i] = hit->ref;
 	}
+	free(by_name);
 	for (int32_t i = 0; rv == EXR_ERR_SUCCESS && i < chunks; i++)
 		rv = exr_write_scanline_chunk_info(
 			c, part, exr->data_window.min.y + i * lines, &info[i]);
@@ -1722,6 +1922,36 @@ static sss_result write_file(const sss_exr *exr, const sss_exr_options *o,
 
 /* ------------------------------------------------- output and temporary */
 
+static int create_locked_temp(const char *path, char **out);
+
+/* The output's folder takes a new file: a temporary is created there and
+ * removed at once (signals wait meanwhile), so that a read-only folder,
+ * file system or a full inode table is said before any work, for root
+ * too (access() would let root through). */
+static sss_result check_folder(const char *path, char *errbuf,
+                               size_t errbuf_len)
+{
+	sigset_t all, old;
+	char *t = NULL;
+	sigfillset(&all);
+	pthread_sigmask(SIG_BLOCK, &all, &old);
+	int fd = create_locked_temp(path, &t);
+	int e = errno;
+	if (fd >= 0) {
+		unlink(t);
+		close(fd);
+	}
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	free(t);
+	if (fd >= 0)
+		return SSS_OK;
+	const char *slash = strrchr(path, '/');
+	int n = slash ? (slash == path ? 1 : (int)(slash - path)) : 1;
+	return FAILX(e == ENOMEM ? SSS_ERR_OUT_OF_MEMORY : SSS_ERR_IO,
+	             "%s: its folder %.*s is not writable: %s", path, n,
+	             slash ? path : ".", strerror(e));
+}
+
 sss_result sss_exr_check_output(const char *path, char *errbuf,
                                 size_t errbuf_len)
 {
@@ -1750,7 +1980,7 @@ sss_result sss_exr_check_output(const char *path, char *errbuf,
 		sss_result r = bad ? FAILX(SSS_ERR_IO, "%s: its folder %s: %s",
 		                           path, dir, strerror(bad)) : SSS_OK;
 		free(dir);
-		return r;
+		return r ? r : check_folder(path, errbuf, errbuf_len);
 	}
 	if (S_ISLNK(st.st_mode)) {
 		char target[512];
@@ -1768,7 +1998,7 @@ sss_result sss_exr_check_output(const char *path, char *errbuf,
 	if (!(st.st_mode & 0222) || access(path, W_OK) != 0)
 		return FAILX(SSS_ERR_IO, "%s: is read-only (mode %04o); it is not "
 		             "replaced", path, (unsigned)(st.st_mode & 07777));
-	return SSS_OK;
+	return check_folder(path, errbuf, errbuf_len);
 }
 
 /* Temporaries are "<dir>/.<name>.tmp-<pid>-<hex>" beside their output (so
@@ -1789,18 +2019,47 @@ static int temp_prefix(const char *path, char *out, size_t cap,
 	return n >= 0 && (size_t)n < cap ? n : -1;
 }
 
-/* "<pid>-<hex>" and nothing else: what create_temp appends. */
-static int is_temp_suffix(const char *s)
+/* FNV-1a, 32 bits, over a then b. */
+static uint32_t name_check(const char *a, size_t a_len, const char *b,
+                           size_t b_len)
+{
+	uint32_t h = 2166136261u;
+	for (size_t i = 0; i < a_len + b_len; i++) {
+		h ^= (unsigned char)(i < a_len ? a[i] : b[i - a_len]);
+		h *= 16777619u;
+	}
+	return h;
+}
+
+/* What create_temp appends to the name (its prefix without the folder):
+ * "<pid>-<8 hex id><8 hex check>", the check being name_check of the
+ * name up to the check. A file that merely looks like a temporary (an
+ * input or scene someone named ".o.exr.tmp-1-ab") lacks it, and is never
+ * taken for one. */
+static void temp_suffix(const char *name, size_t name_len, long pid,
+                        unsigned long id, char *out, size_t cap)
+{
+	char head[64];
+	snprintf(head, sizeof head, "%ld-%08lx", pid, id & 0xffffffffUL);
+	snprintf(out, cap, "%s%08lx", head,
+	         (unsigned long)name_check(name, name_len, head, strlen(head)));
+}
+
+static int is_temp_suffix(const char *name, size_t name_len, const char *s)
 {
 	const char *p = s;
 	while (*p >= '0' && *p <= '9')
 		p++;
-	if (p == s || *p++ != '-' || !*p)
+	if (p == s || p - s > 20 || *p++ != '-' || strlen(p) != 16)
 		return 0;
-	for (; *p; p++)
-		if (!((*p >= '0' && *p <= '9') || (*p >= 'a' && *p <= 'f')))
+	for (const char *q = p; *q; q++)
+		if (!((*q >= '0' && *q <= '9') || (*q >= 'a' && *q <= 'f')))
 			return 0;
-	return 1;
+	char want[64];
+	temp_suffix(name, name_len, strtol(s, NULL, 10),
+	            strtoul((char[9]){p[0], p[1], p[2], p[3], p[4], p[5], p[6],
+	                              p[7], 0}, NULL, 16), want, sizeof want);
+	return strcmp(want, s) == 0;
 }
 
 static int same_file(const struct stat *a, const struct stat *b)
@@ -1812,8 +2071,10 @@ static int same_file(const struct stat *a, const struct stat *b)
  * holds an exclusive flock on its temporary until it is renamed, so a
  * temporary whose lock can be taken has no live writer, whatever host or
  * PID namespace wrote it (a PID says nothing across those); it is
- * removed only while that lock is held and the name is still that file. */
-static void remove_stale_temporaries(const char *path)
+ * removed only while that lock is held and the name is still that file,
+ * and only if its name carries create_temp's check (temp_suffix) and it
+ * is not the file being written from. */
+static void remove_stale_temporaries(const char *path, const sss_exr *exr)
 {
 	size_t cap = strlen(path) + 64, dir_len;
 	char *prefix = malloc(cap), *full = malloc(cap + 256 + NAME_MAX);
@@ -1829,7 +2090,7 @@ static void remove_stale_temporaries(const char *path)
 	struct dirent *e;
 	while (d && (e = readdir(d))) {
 		if (strncmp(e->d_name, name, name_len) != 0 ||
-		    !is_temp_suffix(e->d_name + name_len))
+		    !is_temp_suffix(name, name_len, e->d_name + name_len))
 			continue;
 		snprintf(full, cap + 256 + NAME_MAX, "%.*s%s", (int)dir_len, path,
 		         e->d_name);
@@ -1838,6 +2099,7 @@ static void remove_stale_temporaries(const char *path)
 			continue;
 		struct stat held, now;
 		if (fstat(fd, &held) == 0 && S_ISREG(held.st_mode) &&
+		    !(held.st_dev == exr->dev && held.st_ino == exr->ino) &&
 		    flock(fd, LOCK_EX | LOCK_NB) == 0 && lstat(full, &now) == 0 &&
 		    same_file(&held, &now))
 			unlink(full);
@@ -1865,8 +2127,8 @@ static int create_locked_temp(const char *path, char **out)
 	/* Time and this call's buffer address: distinct across threads. */
 	unsigned long id = (unsigned long)ts.tv_nsec ^ (unsigned long)(uintptr_t)t;
 	for (int attempt = 0; attempt < 64; attempt++, id += 7919) {
-		snprintf(t + n, cap - (size_t)n, "%ld-%lx", (long)getpid(),
-		         id & 0xffffffUL);
+		temp_suffix(t + dir_len, (size_t)n - dir_len, (long)getpid(), id,
+		            t + n, cap - (size_t)n);
 		int fd = open(t, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
 		if (fd < 0 && errno == EEXIST)
 			continue;
@@ -1927,6 +2189,12 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 	if (exr->pass_count == 0)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "%s: the image has no "
 		             "channels to write", path && path[0] ? path : "output");
+	int64_t channels = sss__exr_channel_count(exr);
+	if (channels > sss__exr_max_channels())
+		return FAILX(SSS_ERR_UNSUPPORTED, "%s: %lld channels, more than "
+		             "the %d one file can hold with this OpenEXR; nothing "
+		             "was written", path && path[0] ? path : "output",
+		             (long long)channels, sss__exr_max_channels());
 
 	/* Same device and inode as the source (any name or link to it):
 	 * refused, so a failed or partial run never loses a render. */
@@ -1939,13 +2207,22 @@ sss_result sss_exr_write(const sss_exr *exr, const char *path,
 	if ((r = sss_exr_check_output(path, errbuf, errbuf_len)))
 		return r;
 
-	remove_stale_temporaries(path);
+	remove_stale_temporaries(path, exr);
 	char *tmp = NULL;
 	int fd = create_temp(path, &o, &tmp);
 	if (fd < 0)
 		return FAILX(errno == ENOMEM ? SSS_ERR_OUT_OF_MEMORY : SSS_ERR_IO,
 		             "%s: cannot create a temporary file in its directory: "
 		             "%s", path, strerror(errno));
+	/* A replaced output keeps its permission bits (and, for root, its
+	 * owner). Its hard links are not kept: the rename that makes the
+	 * write atomic gives the name a new file. */
+	struct stat old;
+	if (lstat(path, &old) == 0 && S_ISREG(old.st_mode)) {
+		fchmod(fd, old.st_mode & 07777);
+		if (geteuid() == 0 && fchown(fd, old.st_uid, old.st_gid) == 0)
+			fchmod(fd, old.st_mode & 07777); /* chown drops set-id */
+	}
 	xio io;
 	xio_init(&io, fd);
 	r = write_file(exr, &o, path, tmp, &io, errbuf, errbuf_len);

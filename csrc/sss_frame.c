@@ -15,7 +15,6 @@ struct sss_frame {
 	sss_passes passes;
 	const char *layer;  /* the view layer scattered, owned by exr */
 	float *thickness;   /* the square root of a squared thickness AOV */
-	int had_result;     /* the file itself has a layer named like ours */
 	char *path;         /* the file read, for messages */
 };
 
@@ -127,11 +126,6 @@ static sss_result frame_from(sss_exr *exr, const char *path,
 	if ((r = back_light_passes(exr, f->layer, &f->passes, &f->thickness,
 	                           path, err, errlen)))
 		goto fail;
-	for (int32_t i = 0; i < sss_exr_pass_count(exr); i++) {
-		const char *name;
-		sss_exr_pass(exr, i, &name, NULL, NULL, NULL);
-		f->had_result |= strcmp(name, SSS_RESULT_LAYER) == 0;
-	}
 	*out = f;
 	return SSS_OK;
 fail:
@@ -244,6 +238,36 @@ sss_result sss_frame_scatter(const sss_frame *frame, const sss_scene *scene,
 	return SSS_OK;
 }
 
+/* The result layer is added beside every input channel: an input layer
+ * of that name (a view layer called SSS, or a file that is already an
+ * output) would be replaced, so writing it is refused. So is an image the
+ * OpenEXR in use could not write back whole. A frame with such a layer can
+ * still be scattered: only its file cannot be written. */
+sss_result sss__frame_check_result(const sss_frame *frame, char *err,
+                                   size_t errlen)
+{
+	const sss_exr *exr = frame->exr;
+	for (int32_t i = 0; i < sss_exr_pass_count(exr); i++) {
+		const char *l, *p;
+		sss_exr_pass(exr, i, &l, &p, NULL, NULL);
+		if (strcmp(l, SSS_RESULT_LAYER) == 0)
+			return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT, "%s: has "
+			                 "a layer '%s' (pass %s), the name of the result "
+			                 "layer, which would replace it; rename that "
+			                 "view layer in Blender, or give a render, not "
+			                 "an output of sss", frame->path,
+			                 SSS_RESULT_LAYER, p);
+	}
+	int64_t channels = sss__exr_channel_count(exr) + 7; /* + the result */
+	if (channels > sss__exr_max_channels())
+		return sss__fail(err, errlen, SSS_ERR_UNSUPPORTED, "%s: %lld "
+		                 "channels with the result's 7, more than the %d "
+		                 "one file can hold with this OpenEXR; nothing was "
+		                 "done", frame->path, (long long)channels,
+		                 sss__exr_max_channels());
+	return SSS_OK;
+}
+
 sss_result sss_frame_write(sss_frame *frame, const char *path,
                            const float *combined, const float *light,
                            const sss_exr_options *opt, char *err,
@@ -254,14 +278,16 @@ sss_result sss_frame_write(sss_frame *frame, const char *path,
 	if (!frame || !path || !combined || !light)
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "frame, path, combined and light are required");
-	sss_result r;
+	sss_result r = sss__frame_check_result(frame, err, errlen);
+	if (r)
+		return r;
 	if (!(r = sss_exr_add_pass(frame->exr, SSS_RESULT_LAYER, "Combined",
 	                           "RGBA", combined, err, errlen)) &&
 	    !(r = sss_exr_add_pass(frame->exr, SSS_RESULT_LAYER, "DiffLight",
 	                           "RGB", light, err, errlen)))
 		r = sss_exr_write(frame->exr, path, opt, err, errlen);
-	/* A kept frame holds the render's passes, not the result's copy. */
-	if (!frame->had_result)
-		sss__exr_remove_layer(frame->exr, SSS_RESULT_LAYER);
+	/* A kept frame holds the render's passes, not the result's copy (the
+	 * file had no layer of that name: sss__frame_check_result). */
+	sss__exr_remove_layer(frame->exr, SSS_RESULT_LAYER);
 	return r;
 }

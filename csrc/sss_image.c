@@ -25,6 +25,19 @@ sss_result sss__check_image(const char *name, const sss_image *im,
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: row_stride %lld "
 		             "is smaller than width x channels", name,
 		             (long long)im->row_stride);
+	/* Its last float must be addressable: a stride near 2^60 made the
+	 * span of the image overflow (found by the second hostile round). */
+	int64_t row = (int64_t)im->width * im->channels;
+	int64_t stride = im->row_stride ? im->row_stride : row;
+	uint64_t left = (uint64_t)(UINTPTR_MAX - (uintptr_t)im->data) /
+	                sizeof(float);
+	if (im->height > 1 &&
+	    ((uint64_t)stride > (uint64_t)(INT64_MAX - row) /
+	                        (uint64_t)(im->height - 1) ||
+	     (uint64_t)(stride * (im->height - 1) + row) > left))
+		return FAILX(SSS_ERR_INVALID_ARGUMENT, "pass %s: row_stride %lld "
+		             "for %d rows reaches past the address space", name,
+		             (long long)im->row_stride, im->height);
 	if (im->width != w || im->height != h)
 		return FAILX(SSS_ERR_SIZE_MISMATCH, "pass %s is %dx%d but DiffDir "
 		             "is %dx%d", name, im->width, im->height, w, h);

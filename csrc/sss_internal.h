@@ -72,6 +72,11 @@ const char *sss__file_kind(unsigned mode);
 extern const float sss__deon_variance[6];
 extern const float sss__deon_weight[6][3];
 
+/* Whether a frame's file could be written back with the result layer
+ * (sss_frame.c): no input layer of its name, channels within OpenEXR's
+ * ceiling. */
+sss_result sss__frame_check_result(const sss_frame *frame, char *err,
+                                   size_t errlen);
 /* Removes every pass of a layer from an EXR image (sss_exr.c). */
 void sss__exr_remove_layer(sss_exr *exr, const char *layer);
 
@@ -263,6 +268,9 @@ static inline void sss__blend_pixel(const sss__kernel *k, const float *blurred,
 
 /* Row-band threading (sss_threads.c): fn(ctx, y0, y1) over [0, height). */
 typedef void (*sss__rows_fn)(void *ctx, int32_t y0, int32_t y1);
+/* The CPUs this process may run on (its affinity mask, as taskset and
+ * a farm's CPU pinning set it), else the online ones; "all cores". */
+int32_t sss__cpu_count(void);
 void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
                         void *ctx);
 
@@ -291,6 +299,10 @@ static inline void sss__span(const sss_image *im, const char **lo,
  * whether its header has an attribute whose name starts with prefix. */
 const char *sss__exr_path(const sss_exr *exr);
 int sss__exr_has_attribute_prefix(const sss_exr *exr, const char *prefix);
+/* Channels in the image, and the most one file can hold with the
+ * OpenEXR in use (its coding pipelines count them in 16 bits). */
+int64_t sss__exr_channel_count(const sss_exr *exr);
+int32_t sss__exr_max_channels(void);
 
 /* sss_zip.c: one chunk in OpenEXR's ZIP format through libdeflate.
  * Deflating writes at most out_cap bytes (libdeflate_zlib_compress_bound

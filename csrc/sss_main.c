@@ -5,6 +5,7 @@
 #include "sss.h"
 
 #include <ctype.h>
+#include <limits.h>
 #include <errno.h>
 #include <getopt.h>
 #include <signal.h>
@@ -28,7 +29,8 @@ static const char usage_text[] =
 "Position are used when present.\n"
 "\n"
 "options:\n"
-"  -o, --output PATH       output file (#### pattern for sequences); written\n"
+"  -o, --output PATH       output file (#### pattern for sequences: every run\n"
+"                          of # is the frame number, \\# a literal #); written\n"
 "                          to a temporary file first, then renamed; only\n"
 "                          ever replaces a writable regular file that is\n"
 "                          neither the input nor the scene (not a device,\n"
@@ -52,6 +54,10 @@ static const char usage_text[] =
 "  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
 "      --max-size WxH      refuse inputs larger than this, each 1..1048576\n"
 "                          (default 32768x32768 and 2^28 pixels in all)\n"
+"      --max-channels N    refuse inputs with more channels (default 4096)\n"
+"      --max-memory SIZE   refuse inputs that take more memory decoded, in\n"
+"                          bytes or with K, M, G, T (default: the machine's\n"
+"                          physical memory)\n"
 "      --resume            skip frames whose output exists and reads back\n"
 "                          complete (outputs appear only when complete, so\n"
 "                          a stopped run resumes)\n"
@@ -78,6 +84,7 @@ typedef struct args {
 	int samples;         /* -1 = the scene's */
 	int max_w, max_h;
 	long long max_pixels; /* 0: the library's default */
+	long long max_channels, max_bytes; /* -1: the library's default */
 	int quiet;
 	int resume;
 } args;
@@ -107,6 +114,28 @@ static void print_usage(void)
 	fputs(usage_examples, stdout);
 }
 
+/* s with every control byte (ESC, CR, LF, ...) shown as \xNN, so that a
+ * name from a file (a material, a layer, a path) can neither move the
+ * terminal's cursor nor start a line of its own. */
+static void put_clean(FILE *f, const char *s)
+{
+	for (; *s; s++) {
+		unsigned char ch = (unsigned char)*s;
+		if (ch < 0x20 || ch == 0x7f)
+			fprintf(f, "\\x%02x", ch);
+		else
+			fputc(ch, f);
+	}
+}
+
+/* "sss: <prefix><text>\n" on f, text cleaned. */
+static void say(FILE *f, const char *prefix, const char *text)
+{
+	fprintf(f, "sss: %s", prefix);
+	put_clean(f, text);
+	fputc('\n', f);
+}
+
 /* "  methods: Skin disk, Jade separable" when any material's method
  * differs from the last frame's. */
 static void tell_methods(const sss_scene *scene, int32_t n,
@@ -119,8 +148,9 @@ static void tell_methods(const sss_scene *scene, int32_t n,
 		if (chosen[m] < 0)
 			continue;
 		const char *name = sss_scene_material_name(scene, m);
-		printf("%s%s %s", sep, name && *name ? name : "(unnamed)",
-		       sss_method_name(chosen[m]));
+		fputs(sep, stdout);
+		put_clean(stdout, name && *name ? name : "(unnamed)");
+		printf(" %s", sss_method_name(chosen[m]));
 		sep = ", ";
 	}
 	if (sep[0] == ',')
@@ -139,9 +169,10 @@ static int method_by_name(const char *name)
 
 static int usage_error(const char *fmt, const char *what)
 {
-	fprintf(stderr, "sss: ");
-	fprintf(stderr, fmt, what);
-	fprintf(stderr, "\nTry 'sss --help'.\n");
+	char text[1024];
+	snprintf(text, sizeof text, fmt, what);
+	say(stderr, "", text);
+	fprintf(stderr, "Try 'sss --help'.\n");
 	return 2;
 }
 
@@ -191,6 +222,27 @@ static int parse_size(const char *text, int *w, int *h)
 		return -1;
 	*w = (int)a;
 	*h = (int)b;
+	return 0;
+}
+
+/* "8G", "512M", "1048576", "0": bytes (K, M, G, T: powers of 1024). */
+static int parse_bytes(const char *text, long long *out)
+{
+	static const char units[] = "KMGT";
+	char digits[24];
+	size_t n = strlen(text);
+	const char *unit = n ? strchr(units, text[n - 1]) : NULL;
+	int shift = unit && text[n - 1] ? 10 * (int)(unit - units + 1) : 0;
+	if (shift)
+		n--;
+	if (n == 0 || n >= sizeof digits)
+		return -1;
+	memcpy(digits, text, n);
+	digits[n] = '\0';
+	long long v;
+	if (parse_int(digits, 0, LLONG_MAX >> shift, &v))
+		return -1;
+	*out = v << shift;
 	return 0;
 }
 
@@ -288,24 +340,115 @@ static const char *parse_frames(const char *text, frame_list *out)
 	return why;
 }
 
-/* Replaces the run of '#' in pattern with the zero-padded frame number. */
+/* Whether pattern has a '#' that is not written "\#". */
+static int is_pattern(const char *pattern)
+{
+	for (const char *p = pattern; *p; p++) {
+		if (p[0] == '\\' && p[1] == '#')
+			p++;
+		else if (*p == '#')
+			return 1;
+	}
+	return 0;
+}
+
+/* Replaces every run of '#' in pattern with the frame number, zero-padded
+ * to the run's length ("o_##_###.exr", frame 7: "o_07_007.exr"); "\#"
+ * writes a literal '#'. 0, or -1 when out is too short. */
 static int expand(const char *pattern, int frame, char *out, size_t len)
 {
-	const char *hash = strchr(pattern, '#');
-	if (!hash)
-		return snprintf(out, len, "%s", pattern) < (int)len ? 0 : -1;
-	int width = 0;
-	while (hash[width] == '#')
-		width++;
-	int n = snprintf(out, len, "%.*s%0*d%s", (int)(hash - pattern), pattern,
-	                 width, frame, hash + width);
-	return n >= 0 && (size_t)n < len ? 0 : -1;
+	size_t at = 0;
+	for (const char *p = pattern; *p;) {
+		char num[32];
+		const char *piece = p;
+		size_t n = 1;
+		if (p[0] == '\\' && p[1] == '#') {
+			piece = "#";
+			p += 2;
+		} else if (*p == '#') {
+			int width = 0;
+			while (p[width] == '#')
+				width++;
+			snprintf(num, sizeof num, "%0*d", width > 20 ? 20 : width,
+			         frame);
+			piece = num;
+			n = strlen(num);
+			p += width;
+		} else {
+			p++;
+		}
+		if (at + n >= len)
+			return -1;
+		memcpy(out + at, piece, n);
+		at += n;
+	}
+	if (at >= len)
+		return -1;
+	out[at] = '\0';
+	return 0;
+}
+
+/* The existing input files of a sequence, sorted by identity, so that an
+ * output that is some other frame's input is found before any frame is
+ * written (frame 1 of "in_1###.exr" as output is frame 1001's input). */
+typedef struct frame_id {
+	dev_t dev;
+	ino_t ino;
+	int frame;
+} frame_id;
+
+static int frame_id_cmp(const void *a, const void *b)
+{
+	const frame_id *x = a, *y = b;
+	if (x->dev != y->dev)
+		return x->dev < y->dev ? -1 : 1;
+	if (x->ino != y->ino)
+		return x->ino < y->ino ? -1 : 1;
+	return 0;
+}
+
+/* 0, or -1 with what is wrong in err (nothing may be written then). */
+static int check_sequence(const char *in_pattern, const char *out_pattern,
+                          const frame_list *frames, char *err, size_t len)
+{
+	frame_id *ids = malloc((size_t)frames->count * sizeof *ids);
+	int n = 0, bad = 0;
+	char path[4096];
+	struct stat st;
+	if (!ids) {
+		snprintf(err, len, "out of memory checking %d frames",
+		         frames->count);
+		return -1;
+	}
+	for (int i = 0; i < frames->count; i++)
+		if (!expand(in_pattern, frames->frames[i], path, sizeof path) &&
+		    stat(path, &st) == 0)
+			ids[n++] = (frame_id){st.st_dev, st.st_ino, frames->frames[i]};
+	qsort(ids, (size_t)n, sizeof *ids, frame_id_cmp);
+	for (int i = 0; i < frames->count && !bad; i++) {
+		if (expand(out_pattern, frames->frames[i], path, sizeof path) ||
+		    stat(path, &st) != 0)
+			continue;
+		frame_id key = {st.st_dev, st.st_ino, 0};
+		const frame_id *hit = bsearch(&key, ids, (size_t)n, sizeof *ids,
+		                              frame_id_cmp);
+		if (hit) {
+			char other[4096];
+			expand(in_pattern, hit->frame, other, sizeof other);
+			snprintf(err, len, "frame %d's output %s is frame %d's input "
+			         "%s; nothing was written", frames->frames[i], path,
+			         hit->frame, other);
+			bad = 1;
+		}
+	}
+	free(ids);
+	return bad ? -1 : 0;
 }
 
 /* ------------------------------------------------- stopping mid-write */
 
 /* The temporary file being written (the library says, through
- * temporary_fn), so that SIGINT, SIGTERM, SIGHUP and SIGQUIT remove it
+ * temporary_fn), so that a stopping signal (stop_signals) removes it
  * before the process dies of the signal; SIGKILL leaves it to the next
  * run's clean-up (see sss_exr_write). */
 static char pending_temp[8192];
@@ -323,27 +466,92 @@ static void on_temporary(const char *path, void *user)
 	}
 }
 
+/* The signals that stop a process by default and that a user, a shell
+ * or a farm's scheduler sends: Ctrl-C, kill, a closed terminal or pipe,
+ * an alarm, user signals, and the CPU-time and file-size limits
+ * (ulimit -t, ulimit -f) that schedulers set. The faults (SIGSEGV, ...)
+ * are not caught. Real-time signals also stop by default: caught too. */
+static const struct {
+	int sig;
+	const char *name, *why;
+} stop_signals[] = {
+	{SIGINT, "SIGINT", "interrupted"},
+	{SIGTERM, "SIGTERM", "terminated"},
+	{SIGHUP, "SIGHUP", "its terminal closed"},
+	{SIGQUIT, "SIGQUIT", "quit"},
+	{SIGPIPE, "SIGPIPE", "a closed pipe"},
+	{SIGALRM, "SIGALRM", "an alarm"},
+	{SIGUSR1, "SIGUSR1", "a user signal"},
+	{SIGUSR2, "SIGUSR2", "a user signal"},
+	{SIGXCPU, "SIGXCPU", "its CPU time limit (ulimit -t)"},
+	{SIGXFSZ, "SIGXFSZ", "its file size limit (ulimit -f)"},
+	{SIGVTALRM, "SIGVTALRM", "a virtual timer"},
+	{SIGPROF, "SIGPROF", "a profiling timer"},
+#ifdef SIGPOLL
+	{SIGPOLL, "SIGPOLL", "a pollable event"},
+#endif
+#ifdef SIGPWR
+	{SIGPWR, "SIGPWR", "a power failure"},
+#endif
+};
+
+/* Appends text at *at within buf (async-signal-safe). */
+static void put(char *buf, size_t cap, size_t *at, const char *text)
+{
+	for (; *text && *at + 1 < cap; text++)
+		buf[(*at)++] = *text;
+}
+
+/* "sss: stopped by SIGXFSZ (its file size limit (ulimit -f)); removed the
+ * temporary X", written with write(2) only. */
 static void on_signal(int sig)
 {
-	if (have_temp)
-		unlink(pending_temp);
+	static char msg[sizeof pending_temp + 256];
+	size_t at = 0;
+	const char *name = "a signal", *why = "";
+	for (size_t i = 0; i < sizeof stop_signals / sizeof *stop_signals; i++)
+		if (stop_signals[i].sig == sig) {
+			name = stop_signals[i].name;
+			why = stop_signals[i].why;
+		}
+	put(msg, sizeof msg, &at, "\nsss: stopped by ");
+	put(msg, sizeof msg, &at, name);
+	if (why[0]) {
+		put(msg, sizeof msg, &at, " (");
+		put(msg, sizeof msg, &at, why);
+		put(msg, sizeof msg, &at, ")");
+	}
+	if (have_temp && unlink(pending_temp) == 0) {
+		put(msg, sizeof msg, &at, "; removed the unfinished ");
+		put(msg, sizeof msg, &at, pending_temp);
+	}
+	put(msg, sizeof msg, &at, "\n");
+	if (sig != SIGPIPE) /* stderr may be that pipe */
+		(void)!write(STDERR_FILENO, msg, at);
 	signal(sig, SIG_DFL);
 	raise(sig);
 }
 
+static void catch_one(int sig, const struct sigaction *sa)
+{
+	struct sigaction old;
+	/* An ignored signal stays ignored (nohup, a shell's &). */
+	if (sigaction(sig, NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+		sigaction(sig, sa, NULL);
+}
+
 static void catch_signals(void)
 {
-	static const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
 	struct sigaction sa;
 	memset(&sa, 0, sizeof sa);
 	sa.sa_handler = on_signal;
 	sigfillset(&sa.sa_mask); /* one handler at a time */
-	for (size_t i = 0; i < sizeof sigs / sizeof *sigs; i++) {
-		struct sigaction old;
-		/* An ignored signal stays ignored (nohup, a shell's &). */
-		if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
-			sigaction(sigs[i], &sa, NULL);
-	}
+	for (size_t i = 0; i < sizeof stop_signals / sizeof *stop_signals; i++)
+		catch_one(stop_signals[i].sig, &sa);
+#if defined(SIGRTMIN) && defined(SIGRTMAX)
+	for (int sig = SIGRTMIN; sig <= SIGRTMAX; sig++)
+		catch_one(sig, &sa);
+#endif
 }
 
 /* ----------------------------------------------------- per-frame checks */
@@ -422,7 +630,7 @@ static void progress_bar(int done, int total, int failed)
 int main(int argc, char **argv)
 {
 	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, -1, 32768, 32768,
-	          0, 0, 0};
+	          0, -1, -1, 0, 0};
 	static const struct option longopts[] = {
 		{"output", required_argument, NULL, 'o'},
 		{"scene", required_argument, NULL, 's'},
@@ -434,6 +642,8 @@ int main(int argc, char **argv)
 		{"threads", required_argument, NULL, 't'},
 		{"max-size", required_argument, NULL, 'S'},
 		{"samples", required_argument, NULL, 'N'},
+		{"max-channels", required_argument, NULL, 'C'},
+		{"max-memory", required_argument, NULL, 'M'},
 		{"quiet", no_argument, NULL, 'q'},
 		{"resume", no_argument, NULL, 'R'},
 		{"help", no_argument, NULL, 'h'},
@@ -487,6 +697,17 @@ int main(int argc, char **argv)
 				return usage_error("--samples '%s' must be 1..4096", optarg);
 			a.samples = (int)n;
 			break;
+		case 'C':
+			if (parse_int(optarg, 1, INT32_MAX, &a.max_channels))
+				return usage_error("--max-channels '%s' must be "
+				                   "1..2147483647", optarg);
+			break;
+		case 'M':
+			if (parse_bytes(optarg, &a.max_bytes))
+				return usage_error("--max-memory '%s' must be a size "
+				                   "like 8G, 512M or 0 (the machine's "
+				                   "memory)", optarg);
+			break;
 		case 'S':
 			if (parse_size(optarg, &a.max_w, &a.max_h))
 				return usage_error("--max-size '%s' must be WIDTHxHEIGHT, "
@@ -511,8 +732,8 @@ int main(int argc, char **argv)
 	if (!a.scene)
 		return usage_error("%s", "missing --scene SCENE.json (camera and "
 		                         "materials)");
-	int in_seq = strchr(a.input, '#') != NULL;
-	int out_seq = strchr(a.output, '#') != NULL;
+	int in_seq = is_pattern(a.input);
+	int out_seq = is_pattern(a.output);
 	if (in_seq != out_seq)
 		return usage_error("%s", "INPUT and OUTPUT must both be #### "
 		                         "patterns, or neither");
@@ -526,8 +747,9 @@ int main(int argc, char **argv)
 	if (a.frames) {
 		const char *why = parse_frames(a.frames, &frames);
 		if (why) {
-			fprintf(stderr, "sss: bad --frames '%s': %s\nTry 'sss --help'."
-			        "\n", a.frames, why);
+			fprintf(stderr, "sss: bad --frames '");
+			put_clean(stderr, a.frames);
+			fprintf(stderr, "': %s\nTry 'sss --help'.\n", why);
 			return 2;
 		}
 	} else {
@@ -539,16 +761,29 @@ int main(int argc, char **argv)
 	sss_scene *scene = NULL;
 	sss_result r = sss_scene_load(a.scene, &scene, warn, sizeof warn, err,
 	                              sizeof err);
-	if (warn[0])
-		fprintf(stderr, "sss: %s%s", warn,
-		        warn[strlen(warn) - 1] == '\n' ? "" : "\n");
+	/* warnings: one line each */
+	for (char *line = warn; *line;) {
+		char *nl = strchr(line, '\n');
+		if (nl)
+			*nl = '\0';
+		if (*line)
+			say(stderr, "", line);
+		line = nl ? nl + 1 : line + strlen(line);
+	}
 	if (r) {
-		fprintf(stderr, "sss: %s\n", err);
+		say(stderr, "", err);
 		if (frames.frames != &single)
 			free(frames.frames);
 		return 2;
 	}
 
+	if (in_seq && check_sequence(a.input, a.output, &frames, err,
+	                             sizeof err)) {
+		say(stderr, "error: ", err);
+		sss_scene_free(scene);
+		free(frames.frames);
+		return 2;
+	}
 	file_id scene_id = identify(a.scene);
 	catch_signals();
 	int failed = 0, skipped = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
@@ -566,6 +801,10 @@ int main(int argc, char **argv)
 		po.exr.max_pixels = a.max_pixels;
 	if (a.compression >= 0)
 		po.exr.compression = a.compression;
+	if (a.max_channels > 0)
+		po.exr.max_channels = (int32_t)a.max_channels;
+	if (a.max_bytes >= 0)
+		po.exr.max_bytes = a.max_bytes;
 	po.exr.temporary_fn = on_temporary;
 	/* The method each material ran, told when it changes (auto chooses
 	 * per frame). */
@@ -601,15 +840,21 @@ int main(int argc, char **argv)
 		} else if (a.resume && access(out, F_OK) == 0 &&
 		           complete_output(out, &po.exr, why, sizeof why)) {
 			skipped++;
-			if (!a.quiet)
-				printf("%s: exists, skipped (--resume)\n", out);
+			if (!a.quiet) {
+				put_clean(stdout, out);
+				printf(": exists, skipped (--resume)\n");
+			}
 			if (bar)
 				progress_bar(i + 1, frames.count, failed);
 			continue;
 		} else {
-			if (a.resume && access(out, F_OK) == 0)
-				fprintf(stderr, "sss: %s: exists but is not a complete "
-				        "output (%s); writing it again\n", out, why);
+			if (a.resume && access(out, F_OK) == 0) {
+				char line[sizeof why + 4096 + 128];
+				snprintf(line, sizeof line, "%s: exists but is not a "
+				         "complete output (%s); writing it again", out,
+				         why);
+				say(stderr, "", line);
+			}
 			bad = sss_process_exr(in, out, scene, &po, &t, err,
 			                      sizeof err) != SSS_OK;
 		}
@@ -617,10 +862,13 @@ int main(int argc, char **argv)
 			fputc('\r', stderr);
 		if (bad) {
 			failed++;
-			fprintf(stderr, "sss: error: %s\n", err);
+			say(stderr, "error: ", err);
 		} else if (!a.quiet) {
-			printf("%s -> %s: read %.3f s, sss %.3f s, write %.3f s\n", in,
-			       out, t.read, t.scatter, t.write);
+			put_clean(stdout, in);
+			fputs(" -> ", stdout);
+			put_clean(stdout, out);
+			printf(": read %.3f s, sss %.3f s, write %.3f s\n", t.read,
+			       t.scatter, t.write);
 			if (chosen)
 				tell_methods(scene, nmat, chosen, told);
 			fflush(stdout);

@@ -86,6 +86,11 @@ sss_result sss_process_exr(const char *in, const char *out,
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "%s: output is the input file; refusing to "
 		                 "overwrite it", in);
+	/* The output can be written (its folder takes a new file): said
+	 * before the frame is read and scattered, not after. */
+	sss_result ok = sss_exr_check_output(out, err, errlen);
+	if (ok)
+		return ok;
 
 	sss_timings t = {0, 0, 0};
 	sss_frame *frame = NULL;
@@ -95,11 +100,21 @@ sss_result sss_process_exr(const char *in, const char *out,
 	opt.exr.progress_fn = opt.progress_fn ? stage_progress : NULL;
 	opt.exr.progress_user = &prog;
 
+	/* The thread count holds for the EXR decode and encode too, unless
+	 * the EXR options set their own. */
+	if (opt.exr.num_threads == 0)
+		opt.exr.num_threads = opt.num_threads >= 0 ? opt.num_threads
+		                      : sss_scene_options(scene)->num_threads;
+
 	tell(&prog, "read", 0.0);
 	double t0 = now();
 	if ((r = sss_frame_read(in, opt.layer, &opt.exr, &frame, err, errlen)))
 		goto done;
 	t.read = now() - t0;
+
+	/* Before the scatter: whether the result could be written at all. */
+	if ((r = sss__frame_check_result(frame, err, errlen)))
+		goto done;
 
 	int32_t w = sss_frame_width(frame), h = sss_frame_height(frame);
 	size_t n = (size_t)w * (size_t)h;

@@ -29,7 +29,7 @@ static void append(char *buf, size_t cap, const char *fmt, ...)
 static void describe_layers(const sss_exr *exr, char *buf, size_t cap)
 {
 	int32_t n = sss_exr_pass_count(exr);
-	for (int32_t i = 0; i < n; i++) {
+	for (int32_t i = 0; i < n && strlen(buf) + 1 < cap; i++) {
 		const char *layer, *other, *pass;
 		sss_exr_pass(exr, i, &layer, NULL, NULL, NULL);
 		int seen = 0;
@@ -106,13 +106,13 @@ static int32_t find_run(const char *components, const char *run)
  * NULL when there is none. */
 static const char *render_layer(const sss_exr *exr, const char *layer)
 {
+	/* One look at each pass (a find per pass was quadratic). */
 	for (int32_t i = 0; i < sss_exr_pass_count(exr); i++) {
-		const char *l;
-		sss_image v, diff_dir;
-		sss_exr_pass(exr, i, &l, NULL, NULL, &v);
+		const char *l, *p;
+		sss_exr_pass(exr, i, &l, &p, NULL, NULL);
 		if (layer ? strcmp(l, layer) == 0
-		          : sss_exr_find(exr, l, "DiffDir", &diff_dir) == SSS_OK &&
-		            diff_dir.data == v.data &&
+		          : (strcmp(p, "DiffDir") == 0 ||
+		             strcmp(p, "Diffuse Direct") == 0) &&
 		            strcmp(l, SSS_BACKLIGHT_LAYER) != 0)
 			return l;
 	}

@@ -17,6 +17,8 @@
 
 /* A scene file larger than this is certainly not a scene description. */
 #define SCENE_MAX_BYTES ((size_t)16 << 20)
+/* Values in one: 32767 materials of 60 values are 2M (~100 MB in cJSON). */
+#define SCENE_MAX_VALUES (1 << 21)
 /* sss_apply's limit on the material table. */
 #define SCENE_MAX_MATERIALS 32767
 #define PATH_LEN 96
@@ -275,7 +277,7 @@ static sss_result get_int(ctx *c, const cJSON *it, const char *path,
 	if (!isfinite(v) || v != floor(v))
 		return FAIL(c, "%s: expected an integer, got %g", path, v);
 	if (v < lo || v > hi) {
-		if (hi == INT32_MAX)
+		if (hi == INT32_MAX && v < lo)
 			return FAIL(c, "%s: %g is out of range (must be >= %d)", path,
 			            v, lo);
 		return FAIL(c, "%s: %g is out of range (must be %d..%d)", path, v,
@@ -802,6 +804,35 @@ static sss_result syntax_error(ctx *c, const char *text, const char *at,
 	            printable(near, buf, sizeof buf));
 }
 
+/* Values (numbers, strings, literals, arrays, objects; keys count as
+ * strings) in a JSON text, roughly: every ',' '[' '{' ':' outside
+ * strings, plus one. *nul: where a string holds \u0000, else NULL. */
+static long long count_values(const char *text, const char **nul)
+{
+	long long n = 1;
+	int in_string = 0;
+	*nul = NULL;
+	for (const char *s = text; *s; s++) {
+		if (in_string) {
+			if (*s == '\\') {
+				if (s[1] == 'u' && strncmp(s + 2, "0000", 4) == 0) {
+					*nul = s;
+					return n;
+				}
+				if (s[1])
+					s++;
+			} else if (*s == '"') {
+				in_string = 0;
+			}
+		} else if (*s == '"') {
+			in_string = 1;
+		} else if (*s == ',' || *s == '[' || *s == '{' || *s == ':') {
+			n++;
+		}
+	}
+	return n;
+}
+
 sss_result sss_scene_parse(const char *json, size_t json_len,
                            sss_scene **out, char *warnbuf,
                            size_t warnbuf_len, char *errbuf,
@@ -835,6 +866,22 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 	sss_scene *sc = NULL;
 	if (!*skip_space(text)) {
 		r = FAIL(&c, "empty JSON text");
+		goto done;
+	}
+	/* Before cJSON sees it: a "\u0000" in a string would end that
+	 * string early in cJSON's C strings ("unit_scale\u0000junk" read as
+	 * "unit_scale"), and every value costs cJSON ~40 times its text (a
+	 * 6 MB array took 248 MB), so values are counted first. */
+	const char *bad = NULL;
+	long long values = count_values(text, &bad);
+	if (bad) {
+		r = syntax_error(&c, text, bad, "a string holds \\u0000 (a NUL "
+		                 "character), which no key or name may contain");
+		goto done;
+	}
+	if (values > SCENE_MAX_VALUES) {
+		r = FAIL(&c, "more than %d JSON values (%lld); a scene "
+		         "description holds far fewer", SCENE_MAX_VALUES, values);
 		goto done;
 	}
 	/* The end pointer, not cJSON_GetErrorPtr(): that one is global. */

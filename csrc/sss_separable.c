@@ -677,6 +677,13 @@ sss_result sss_kernel_1d(const sss_material *mat, double pixels_per_metre,
 	/* On a flat fronto-parallel plane a tap's distance is its offset. As
 	 * in blur_pixel, a kernel within the dense rows reads every pixel. */
 	double r = k->support * pixels_per_metre;
+	/* A kernel wider than any image (1e12 pixels per metre overflowed
+	 * the tap layout's integer conversions) is the caller's error. */
+	if (!(r <= (double)(1 << 24))) {
+		free(k);
+		free(tap);
+		return SSS_ERR_INVALID_ARGUMENT;
+	}
 	int32_t budget = k->taps, dense = dense_half((budget - 1) / 2);
 	if (r < dense + 0.5)
 		budget = 2 * dense + 1;

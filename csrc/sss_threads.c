@@ -3,9 +3,11 @@
  * scattering object fills only part of it keeps every core busy. Every
  * row's arithmetic is independent of who computes it, so results are
  * identical for any thread count. */
+#define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT */
 #include "sss_internal.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <unistd.h>
 
@@ -34,14 +36,21 @@ static void *worker(void *arg)
 	}
 }
 
+int32_t sss__cpu_count(void)
+{
+	cpu_set_t set;
+	CPU_ZERO(&set);
+	if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+		return CPU_COUNT(&set);
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	return cores > 0 ? (int32_t)(cores < MAX_THREADS ? cores : MAX_THREADS)
+	                 : 1;
+}
+
 void sss__parallel_rows(int32_t height, int32_t num_threads, sss__rows_fn fn,
                         void *ctx)
 {
-	int32_t n = num_threads;
-	if (n <= 0) {
-		long cores = sysconf(_SC_NPROCESSORS_ONLN);
-		n = cores > 0 ? (int32_t)cores : 1;
-	}
+	int32_t n = num_threads > 0 ? num_threads : sss__cpu_count();
 	if (n > MAX_THREADS)
 		n = MAX_THREADS;
 	if (n > height)

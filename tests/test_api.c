@@ -201,6 +201,21 @@ static void test_apply_arguments(void)
 	CHECK_STATUS("apply-empty-table", SSS_OK,
 	             sss_apply(&p, &cam, NULL, 0, &opt, &out, NULL, err,
 	                       sizeof err));
+	/* A stride near 2^60 overflowed the image's span (UBSan), no status. */
+	BAD_APPLY("apply-stride-huge", SSS_ERR_INVALID_ARGUMENT,
+	          out.row_stride = (int64_t)1 << 60, out.row_stride = 0,
+	          "address space");
+	BAD_APPLY("apply-stride-huge-in", SSS_ERR_INVALID_ARGUMENT,
+	          p.depth.row_stride = INT64_MAX / 2, p.depth.row_stride = 0,
+	          "address space");
+	/* Both outputs in one buffer: both were wrong, with SSS_OK. */
+	sss_image light = {buf + 4, 8, 6, 3, 32};
+	err[0] = 0;
+	CHECK_STATUS("apply-outputs-shared", SSS_ERR_INVALID_ARGUMENT,
+	             sss_apply(&p, &cam, &mat, 1, &opt, &out, &light, err,
+	                       sizeof err));
+	CHECK("apply-outputs-shared.msg", strstr(err, "share memory") != NULL,
+	      "message '%s'", err);
 	free(buf);
 	synth_free(s);
 }
@@ -220,6 +235,14 @@ static void test_helpers_reject(void)
 	n = 1; /* too small for a visible kernel */
 	CHECK_STATUS("kern-3", SSS_ERR_INVALID_ARGUMENT,
 	             sss_kernel_1d(&m, 1e4, 0, off, w, &n));
+	/* 1e12 pixels per metre overflowed a float-to-int conversion
+	 * (UBSan) and returned SSS_OK with every weight 0. */
+	n = 8;
+	CHECK_STATUS("kern-huge-ppm", SSS_ERR_INVALID_ARGUMENT,
+	             sss_kernel_1d(&m, 1e12, 0, off, w, &n));
+	n = 8;
+	CHECK_STATUS("kern-max-ppm", SSS_ERR_INVALID_ARGUMENT,
+	             sss_kernel_1d(&m, 1.7e308, 0, off, w, &n));
 	double metres;
 	CHECK_STATUS("support-1", SSS_ERR_INVALID_ARGUMENT,
 	             sss_material_support(NULL, &metres));

@@ -12,6 +12,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -471,7 +472,7 @@ static const struct {
 } blender_passes[] = {
 	{"ViewLayer", "Combined", "RGBA"},
 	{"ViewLayer", "Crypto", "abgr"},
-	{"ViewLayer", "Deep.Pass", "R"},
+	{"ViewLayer.Deep", "Pass", "R"},
 	{"ViewLayer", "Denoising Normal", "X"},
 	{"ViewLayer", "Depth", "Z"},
 	{"ViewLayer", "DiffCol", "RGB"},
@@ -594,7 +595,10 @@ static long check_values(const sss_exr *exr, const tfile *f,
 	long bad = 0;
 	for (int c = 0; c < f->nchan; c++) {
 		const char *name = f->ch[c].name;
-		const char *last = strrchr(name, '.'), *first = strchr(name, '.');
+		const char *last = strrchr(name, '.'), *first = last;
+		while (first && first > name && first[-1] != '.')
+			first--; /* from the end, as Blender splits */
+		first = first && first > name ? first - 1 : last;
 		char layer[64] = "", pass[64] = "";
 		if (first != last) {
 			snprintf(layer, sizeof layer, "%.*s", (int)(first - name), name);
@@ -656,6 +660,17 @@ static void test_options(void)
 	sss_exr_options_default(&o);
 	o.num_threads = -1;
 	CHECK_STATUS("exr.opt.threads", SSS_ERR_INVALID_ARGUMENT,
+	             sss_exr_read(p, &o, &exr, errbuf, sizeof errbuf));
+	sss_exr_options_default(&o);
+	o.max_channels = 0;
+	CHECK_STATUS("exr.opt.max_channels", SSS_ERR_INVALID_ARGUMENT,
+	             sss_exr_read(p, &o, &exr, errbuf, sizeof errbuf));
+	/* ABI 8's struct, without max_channels and max_bytes: still read,
+	 * with their defaults (a missing file is then the error). */
+	sss_exr_options_default(&o);
+	o.struct_size = (uint32_t)offsetof(sss_exr_options, max_channels);
+	o.max_channels = 0; /* past ABI 8's end: not read */
+	CHECK_STATUS("exr.opt.abi8", SSS_ERR_IO,
 	             sss_exr_read(p, &o, &exr, errbuf, sizeof errbuf));
 	CHECK_STATUS("exr.arg.path", SSS_ERR_INVALID_ARGUMENT,
 	             sss_exr_read(NULL, NULL, &exr, errbuf, sizeof errbuf));
@@ -794,7 +809,7 @@ static void test_round_trip(void)
 	      v.data[0] == sss[0] && v.data[4 * n - 1] == sss[4 * n - 1],
 	      "replace");
 	CHECK_STATUS("exr.add.dot", SSS_ERR_INVALID_ARGUMENT,
-	             sss_exr_add_pass(exr, "S.S", "Combined", "RGB", sss, errbuf,
+	             sss_exr_add_pass(exr, "SSS", "Com.bined", "RGB", sss, errbuf,
 	                              sizeof errbuf));
 	CHECK_STATUS("exr.add.dotpass", SSS_ERR_INVALID_ARGUMENT,
 	             sss_exr_add_pass(exr, "", "a.b", "RGB", sss, errbuf,
@@ -1632,6 +1647,128 @@ static void test_missing_passes(void)
 	tfile_free(&f);
 }
 
+
+/* A view layer named as Blender names a copy ("ViewLayer.001"): names are
+ * split from the end, so the layer is found by itself and by name. */
+static void test_dotted_layer(void)
+{
+	static const char *names[] = {"ViewLayer.001.DiffDir.R",
+	                              "ViewLayer.001.DiffDir.G",
+	                              "ViewLayer.001.DiffDir.B",
+	                              "ViewLayer.001.DiffCol.R",
+	                              "ViewLayer.001.DiffCol.G",
+	                              "ViewLayer.001.DiffCol.B",
+	                              "ViewLayer.001.Depth.Z",
+	                              "ViewLayer.001.IndexMA.X"};
+	tfile f;
+	tfile_named(&f, names, (int)(sizeof names / sizeof *names), 3, 2,
+	            EXR_COMPRESSION_ZIP, EXR_PIXEL_FLOAT);
+	char p[256];
+	tpath(p, sizeof p, "dotted.exr");
+	CHECK("exr.dotted.write", write_test_exr(p, &f) == 0, "raw write");
+	sss_exr *exr = NULL;
+	CHECK_STATUS("exr.dotted.read", SSS_OK,
+	             sss_exr_read(p, NULL, &exr, errbuf, sizeof errbuf));
+	sss_passes ps;
+	const char *used = NULL;
+	if (exr) {
+		const char *l = NULL, *pass = NULL;
+		int32_t np = sss_exr_pass_count(exr), same = 0;
+		for (int32_t i = 0; i < np; i++) {
+			sss_exr_pass(exr, i, &l, &pass, NULL, NULL);
+			same += !strcmp(l, "ViewLayer.001") && strchr(pass, '.') == NULL;
+		}
+		CHECK("exr.dotted.split", np == 4 && same == 4, "%d passes", np);
+		CHECK_STATUS("exr.dotted.auto", SSS_OK,
+		             sss_exr_render_passes(exr, NULL, &ps, &used, errbuf,
+		                                   sizeof errbuf));
+		CHECK("exr.dotted.used", used && !strcmp(used, "ViewLayer.001"),
+		      "%s", used ? used : "(none)");
+		CHECK_STATUS("exr.dotted.named", SSS_OK,
+		             sss_exr_render_passes(exr, "ViewLayer.001", &ps, NULL,
+		                                   errbuf, sizeof errbuf));
+		CHECK("exr.dotted.values", check_values(exr, &f, NULL) == 0,
+		      "values");
+		/* Added under a dotted layer, read back as that layer. */
+		float one[6] = {1, 2, 3, 4, 5, 6};
+		CHECK_STATUS("exr.dotted.add", SSS_OK,
+		             sss_exr_add_pass(exr, "SSS-ViewLayer.001", "X", "V",
+		                              one, errbuf, sizeof errbuf));
+		CHECK_STATUS("exr.dotted.add.pass_dot", SSS_ERR_INVALID_ARGUMENT,
+		             sss_exr_add_pass(exr, "L", "a.b", "V", one, errbuf,
+		                              sizeof errbuf));
+		char o[256];
+		tpath(o, sizeof o, "dotted_out.exr");
+		CHECK_STATUS("exr.dotted.save", SSS_OK,
+		             sss_exr_write(exr, o, NULL, errbuf, sizeof errbuf));
+		sss_exr *back = NULL;
+		sss_image v;
+		CHECK_STATUS("exr.dotted.reread", SSS_OK,
+		             sss_exr_read(o, NULL, &back, errbuf, sizeof errbuf));
+		CHECK_STATUS("exr.dotted.find", SSS_OK,
+		             sss_exr_find(back, "SSS-ViewLayer.001", "X", &v));
+		sss_exr_free(back);
+		sss_exr_free(exr);
+	}
+	tfile_free(&f);
+}
+
+/* uint channels (object or cryptomatte-like IDs) come back bit for bit,
+ * also above 2^24 where a float rounds them; a float view changed by
+ * the caller is written as changed. */
+static void test_uint_exact(void)
+{
+	static const char *names[] = {"L.ID.X", "L.Depth.Z"};
+	tfile f;
+	tfile_named(&f, names, 1, 4, 4, EXR_COMPRESSION_ZIP, EXR_PIXEL_UINT);
+	f.nchan = 2;
+	f.ch[1].name = names[1];
+	f.ch[1].type = EXR_PIXEL_FLOAT;
+	fill_channel(&f.ch[1], 4, 4);
+	uint32_t *id = f.ch[0].data;
+	static const uint32_t big[] = {16777217u, 16777219u, 0xFFFFFFFFu,
+	                               0x80000001u, 0xFFFFFF81u, 123456789u};
+	for (size_t i = 0; i < sizeof big / sizeof *big; i++)
+		id[i] = big[i];
+	char p[256], o[256];
+	tpath(p, sizeof p, "uint.exr");
+	tpath(o, sizeof o, "uint_out.exr");
+	CHECK("exr.uint.write", write_test_exr(p, &f) == 0, "raw write");
+	sss_exr *exr = NULL;
+	CHECK_STATUS("exr.uint.read", SSS_OK,
+	             sss_exr_read(p, NULL, &exr, errbuf, sizeof errbuf));
+	CHECK_STATUS("exr.uint.save", SSS_OK,
+	             sss_exr_write(exr, o, NULL, errbuf, sizeof errbuf));
+	rawimg r;
+	long bad = 0;
+	if (raw_read(o, &r) == 0) {
+		int k = raw_index(&r, "L.ID.X");
+		for (int i = 0; k >= 0 && i < 16; i++)
+			bad += ((uint32_t *)r.data[k])[i] != id[i];
+		CHECK("exr.uint.bits", k >= 0 && r.type[k] == EXR_PIXEL_UINT &&
+		      bad == 0, "%ld values changed", bad);
+	} else {
+		CHECK("exr.uint.raw", 0, "cannot read %s", o);
+	}
+	raw_free(&r);
+	/* Changed through the view: the new value is written. */
+	sss_image v;
+	if (exr && sss_exr_find(exr, "L", "ID", &v) == SSS_OK) {
+		v.data[0] = 7.0f;
+		CHECK_STATUS("exr.uint.save2", SSS_OK,
+		             sss_exr_write(exr, o, NULL, errbuf, sizeof errbuf));
+		if (raw_read(o, &r) == 0) {
+			int k = raw_index(&r, "L.ID.X");
+			CHECK("exr.uint.changed", k >= 0 &&
+			      ((uint32_t *)r.data[k])[0] == 7 &&
+			      ((uint32_t *)r.data[k])[1] == id[1], "not kept");
+		}
+		raw_free(&r);
+	}
+	sss_exr_free(exr);
+	tfile_free(&f);
+}
+
 /* (4) Writing: never over the source, atomic, no temporary left. */
 static void test_write_safety(void)
 {
@@ -1829,6 +1966,28 @@ static void test_progress(void)
 	      "%d calls, stage %d, last %g", seen.n, stage, last);
 }
 
+/* An output folder that takes no new file is said before the frame is
+ * read or scattered (procfs: not even root creates a file there). */
+static void test_unwritable_folder_first(void)
+{
+	char err[512];
+	sss_scene *scene = NULL;
+	sss_scene_load("tests/data/blender_8x8.json", &scene, NULL, 0, err,
+	               sizeof err);
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	opt.progress_fn = on_progress;
+	seen.n = 0;
+	CHECK_STATUS("process.folder", SSS_ERR_IO,
+	             sss_process_exr("tests/data/blender_8x8.exr",
+	                             "/proc/sss_out.exr", scene, &opt, NULL, err,
+	                             sizeof err));
+	CHECK("process.folder.first", seen.n == 0 &&
+	      file_contains(err, "its folder /proc is not writable"),
+	      "%d progress calls; %s", seen.n, err);
+	sss_scene_free(scene);
+}
+
 int main(void)
 {
 	snprintf(tmpdir, sizeof tmpdir, "/tmp/sss_exr_XXXXXX");
@@ -1848,8 +2007,11 @@ int main(void)
 	test_unsupported();
 	test_dwa();
 	test_missing_passes();
+	test_dotted_layer();
+	test_uint_exact();
 	test_write_safety();
 	test_progress();
+	test_unwritable_folder_first();
 	cleanup(tmpdir);
 	return tu_finish("test_exr");
 }

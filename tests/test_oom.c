@@ -121,12 +121,20 @@ static void no_partial_output(void *ctx, const char *id)
 	CHECK(id, count_files(dir) == 0, "a partial output was left behind");
 }
 
+/* Out of memory is said as such, never as a damaged file. */
+static int oom_as_corrupt, oom_said;
+
 static sss_result run_read(void *ctx)
 {
 	(void)ctx;
 	sss_exr *exr = NULL;
+	char err[512];
 	sss_result r = sss_exr_read("tests/data/blender_8x8.exr", NULL, &exr,
-	                            NULL, 0);
+	                            err, sizeof err);
+	if (r == SSS_ERR_OUT_OF_MEMORY) {
+		oom_as_corrupt += strstr(err, "corrupt") != NULL;
+		oom_said += strstr(err, "out of memory") != NULL;
+	}
 	sss_exr_free(exr);
 	return r;
 }
@@ -247,6 +255,9 @@ int main(void)
 		return 1;
 	}
 	oom_loop("oom-exr-read", run_read, NULL, NULL);
+	CHECK("oom-exr-read.message", oom_as_corrupt == 0 && oom_said > 0,
+	      "%d failures said 'corrupt', %d 'out of memory'", oom_as_corrupt,
+	      oom_said);
 	write_ctx w;
 	snprintf(w.path, sizeof w.path, "%s/out.exr", dir);
 	CHECK_STATUS("oom-exr-setup", SSS_OK,

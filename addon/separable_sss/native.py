@@ -32,7 +32,9 @@ class ExrOptions(ctypes.Structure):
                 ("temporary_fn", ctypes.c_void_p),
                 ("temporary_user", ctypes.c_void_p),
                 ("progress_fn", ctypes.c_void_p),
-                ("progress_user", ctypes.c_void_p)]
+                ("progress_user", ctypes.c_void_p),
+                ("max_channels", ctypes.c_int32),
+                ("max_bytes", ctypes.c_int64)]
 
 
 # sss_process_options.progress_fn: (stage, share of it done, user)

@@ -300,6 +300,15 @@ class Flow:
         first = self.layers[0]
         with native.Exr(self.result_path(first, frame)) as out, \
                 native.Exr(path) as written:
+            # A view layer already named SSS-NAME would be replaced by
+            # NAME's result: refused, as the library refuses one named SSS.
+            taken = {layer for layer, *_ in out.passes()}
+            for layer in self.layers[1:]:
+                if "SSS-" + layer in taken:
+                    raise pipeline.SSSError(
+                        f"frame {frame}: view layer 'SSS-{layer}' has the "
+                        f"name of view layer '{layer}''s SSS result, which "
+                        "would replace it; rename it")
             out.copy_layer(written, "Composite")
             for layer in self.layers[1:]:
                 with native.Exr(self.result_path(layer, frame)) as other:

@@ -4,6 +4,7 @@ an animation its own, File Output nodes and every view layer included; a
 frame that fails fails the job; with the switch off nothing changes."""
 import glob
 import os
+import shutil
 import subprocess
 
 import bpy
@@ -11,8 +12,8 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from helpers import BLENDER, ROOT, build_blend, compat, diff, load_addon, \
-    snapshot
+from helpers import BLENDER, BUILD, ROOT, build_blend, compat, diff, \
+    load_addon, snapshot
 
 separable_sss = load_addon()
 from separable_sss import pipeline, render_flow  # noqa: E402
@@ -186,6 +187,33 @@ def test_multilayer_exr_output_keeps_every_pass(blend, tmp_path):
     assert np.abs(composite - sss).max() < 1e-3
 
 
+def test_layer_named_as_another_layers_result_is_refused(blend, tmp_path):
+    """A multilayer EXR output gets SSS-NAME for view layer NAME's result:
+    a view layer already called that would be replaced, so the frame
+    fails with the reason (as the library refuses one named SSS)."""
+    scene = open_scene(blend, tmp_path)
+    compat.set_multilayer_exr(scene.render.image_settings)
+    scene.view_layers.new("Second")
+    scene.view_layers.new("SSS-Second")
+    tree = compat.compositor_tree(scene, create=True)
+    out = tree.nodes.new("CompositorNodeOutputFile")
+    compat.set_file_output(out, str(tmp_path / "fo"), "PNG", '16')
+    names = ["Second", "SSS-Second"]  # both shown, so both rendered
+    sockets = compat.file_output_inputs(out, ["a", "b"])
+    for name, socket in zip(names, sockets):
+        node = tree.nodes.new("CompositorNodeRLayers")
+        node.layer = name
+        tree.links.new(node.outputs["Image"], socket)
+    scene.sss.enabled = True
+    scene.frame_start = scene.frame_end = 1
+    scene.render.filepath = str(tmp_path / "frame_####")
+    render_flow.last_error = None
+    bpy.ops.render.render(animation=True)
+    render_flow.remove_leftovers()
+    assert "view layer 'SSS-Second' has the name of view layer 'Second''s " \
+        "SSS result" in str(render_flow.last_error)
+
+
 def test_switch_off_is_plain_cycles(blend, tmp_path):
     scene = open_scene(blend, tmp_path)
     with_addon = render_still(scene, tmp_path / "a")
@@ -197,20 +225,35 @@ def test_switch_off_is_plain_cycles(blend, tmp_path):
     assert np.array_equal(with_addon, without)
 
 
-def test_file_output_and_second_view_layer(blend, tmp_path):
+@pytest.mark.parametrize("layer_name", ["Second", "ViewLayer.001"])
+def test_file_output_and_second_view_layer(blend, tmp_path, monkeypatch,
+                                           layer_name):
+    """Every shown view layer is scattered, also one named as Blender
+    names a copy (ViewLayer.001: names split from the end); the `sss`
+    command on the same passes gives that layer the same result."""
     scene = open_scene(blend, tmp_path)
-    scene.view_layers.new("Second")
+    scene.view_layers.new(layer_name)
     want = expected(scene)
     tree = compat.compositor_tree(scene, create=True)
     first = next(n for n in tree.nodes
                  if n.bl_idname == "CompositorNodeRLayers")
     second = tree.nodes.new("CompositorNodeRLayers")
-    second.layer = "Second"
+    second.layer = layer_name
     out = tree.nodes.new("CompositorNodeOutputFile")
     compat.set_file_output(out, str(tmp_path / "fo"), "PNG", '16')
     sockets = compat.file_output_inputs(out, ["first", "second"])
     tree.links.new(first.outputs["Image"], sockets[0])
     tree.links.new(second.outputs["Image"], sockets[1])
+    kept = {}
+    scatter = pipeline.scatter
+
+    def keeping(job):  # the render flow's files for that layer, kept
+        scatter(job)
+        if job.layer == layer_name:
+            for key in ("input_exr", "scene_json", "output_exr"):
+                kept[key] = str(tmp_path / ("kept_" + key))
+                shutil.copy(getattr(job, key), kept[key])
+    monkeypatch.setattr(pipeline, "scatter", keeping)
     scene.sss.enabled = True
     render_still(scene, tmp_path / "still")
     for name in ("first", "second"):
@@ -218,6 +261,17 @@ def test_file_output_and_second_view_layer(blend, tmp_path):
         assert len(files) == 1, os.listdir(tmp_path / "fo")
         got = png(files[0])
         assert np.abs(got - want).max() <= 1.5 / 255, name
+    cli = str(tmp_path / "cli.exr")
+    proc = subprocess.run([os.path.join(BUILD, "sss"), kept["input_exr"],
+                           "-l", layer_name, "-o", cli, "--scene",
+                           kept["scene_json"], "-q"], capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    a, _ = read_channels(kept["output_exr"])
+    b, _ = read_channels(cli)
+    assert f"{layer_name}.DiffDir.R" in b
+    assert np.array_equal(np.stack([a[f"SSS.Combined.{c}"] for c in "RGB"]),
+                          np.stack([b[f"SSS.Combined.{c}"] for c in "RGB"]))
 
 
 def test_failed_frame_restores_and_reports(blend, tmp_path, monkeypatch):

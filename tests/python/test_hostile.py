@@ -27,6 +27,18 @@ def args_for(blender_render, src, out, *extra):
     return [src, "-o", out, "--scene", blender_render / "scene.json", *extra]
 
 
+def temp_name(output_name, pid=999999999, ident=1):
+    """The name a writer gives its temporary for output_name (cut to 128
+    bytes): ".NAME.tmp-PID-IDENT" + FNV-1a of all before it, so that only
+    a file the writer named is ever taken for a stale temporary."""
+    name = "." + output_name[:128] + ".tmp-"
+    head = f"{pid}-{ident:08x}"
+    h = 2166136261
+    for b in (name + head).encode():
+        h = ((h ^ b) * 16777619) & 0xFFFFFFFF
+    return f"{name}{head}{h:08x}"
+
+
 def only(tmp_path, *names):
     """The folder holds exactly these names (no output, no temporary)."""
     assert sorted(os.listdir(tmp_path)) == sorted(names)
@@ -231,7 +243,7 @@ def test_resume_after_a_killed_run(sss_cmd, blender_render, tmp_path):
         assert "SSS.Combined.R" in ch
     stamps = {n: (tmp_path / n).stat().st_mtime_ns for n in done}
     # A temporary file of a process that is gone, as a kill can leave.
-    (tmp_path / ".out_0040.exr.tmp-999999999-1").write_bytes(b"partial")
+    (tmp_path / temp_name("out_0040.exr")).write_bytes(b"partial")
     proc = run(*args[:-1], "--resume", check=0)
     assert not list(tmp_path.glob(".*tmp*")), "stale temporary kept"
     assert f"{len(done)} skipped" in proc.stdout
@@ -309,7 +321,7 @@ def test_long_output_name_cleans_its_own_stale_temporary(
     """Over 128 bytes the temporary's name is cut; the clean-up matches
     the same cut name."""
     name = "n" * 200 + ".exr"
-    stale = tmp_path / ("." + name[:128] + ".tmp-999999999-1")
+    stale = tmp_path / temp_name(name)
     stale.write_bytes(b"partial")
     run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
                            tmp_path / name), check=0)
@@ -321,8 +333,8 @@ def test_live_writers_temporary_is_never_deleted(sss_cmd, blender_render,
     """Another writer (another host or PID namespace: its PID means
     nothing here) holds the lock on its temporary; it is kept. An unlocked
     one is stale and goes."""
-    live = tmp_path / ".out.exr.tmp-999999999-a1"
-    stale = tmp_path / ".out.exr.tmp-999999999-b2"
+    live = tmp_path / temp_name("out.exr", ident=0xa1)
+    stale = tmp_path / temp_name("out.exr", ident=0xb2)
     stale.write_bytes(b"left by a killed run")
     with open(live, "wb") as held:
         fcntl.flock(held, fcntl.LOCK_EX)
@@ -443,3 +455,361 @@ def test_blender5_multi_part_render(sss_cmd, tmp_path):
     out = tmp_path / "out.exr"
     run(sss_cmd, src, "-o", out, "--scene", scene, check=0)
     assert "SSS.Combined.R" in read_channels(out)[0]
+
+
+# ------------------------------------------- second round: names, data loss
+
+def dotted_copy(blender_render, path):
+    """The render with a second view layer as Blender names a copy,
+    ViewLayer.001, whose diffuse light is half the first's."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    both = dict(ch)
+    for name, value in ch.items():
+        if name.startswith("ViewLayer."):
+            half = ".DiffDir." in name or ".DiffInd." in name
+            both["ViewLayer.001." + name[len("ViewLayer."):]] = \
+                value * 0.5 if half else value
+    write_channels(path, both, spec.width, spec.height,
+                   attributes={"cycles.ViewLayer.samples": "4",
+                               "cycles.ViewLayer.001.samples": "4"})
+
+
+def test_view_layer_named_with_a_dot(sss_cmd, blender_render, tmp_path):
+    """Names split from the end, as Blender splits them: ViewLayer.001's
+    passes are its own, found by name (-l) and by the first-layer rule."""
+    src = tmp_path / "two.exr"
+    dotted_copy(blender_render, src)
+    lights = {}
+    for layer in ("ViewLayer.001", "ViewLayer", None):
+        out = tmp_path / f"out_{layer}.exr"
+        extra = ["-l", layer] if layer else []
+        run(sss_cmd, *args_for(blender_render, src, out, "--radius-scale",
+                               "0", *extra), check=0)
+        ch, _ = read_channels(out)
+        lights[layer] = pass_rgb(ch, "SSS.DiffLight")
+        assert "ViewLayer.001.DiffDir.R" in ch and "ViewLayer.DiffDir.R" in ch
+    one = pass_rgb(read_channels(src)[0], "ViewLayer.001.DiffDir")
+    assert np.array_equal(lights["ViewLayer.001"],
+                          one + pass_rgb(read_channels(src)[0],
+                                         "ViewLayer.001.DiffInd"))
+    assert np.allclose(lights["ViewLayer"], 2 * lights["ViewLayer.001"])
+    # the first layer with DiffDir, in file order (sorted names)
+    assert np.array_equal(lights[None], lights["ViewLayer.001"])
+    proc = run(sss_cmd, *args_for(blender_render, src, tmp_path / "x.exr",
+                                  "-l", "ViewLayer.002"), check=1)
+    assert "'ViewLayer.001' (" in proc.stderr, proc.stderr
+
+
+def test_input_layer_named_sss_is_never_replaced(sss_cmd, blender_render,
+                                                 tmp_path):
+    """The result layer is SSS: an input layer of that name (a view layer
+    called SSS, or an output given again) is refused, not replaced."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    renamed = {("SSS." + k[len("ViewLayer."):] if k.startswith("ViewLayer.")
+                else k): v for k, v in ch.items()}
+    src = tmp_path / "sss_layer.exr"
+    write_channels(src, renamed, spec.width, spec.height)
+    out = tmp_path / "out.exr"
+    proc = run(sss_cmd, *args_for(blender_render, src, out), check=1)
+    assert "has a layer 'SSS'" in proc.stderr, proc.stderr
+    assert "rename that view layer" in proc.stderr
+    only(tmp_path, "sss_layer.exr")
+    # an output given again as the input: refused the same way
+    run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                           out), check=0)
+    proc = run(sss_cmd, *args_for(blender_render, out, tmp_path / "o2.exr"),
+               check=1)
+    assert "has a layer 'SSS'" in proc.stderr, proc.stderr
+
+
+def test_clean_up_deletes_only_what_a_writer_named(sss_cmd, blender_render,
+                                                   tmp_path):
+    """An input and a scene whose names merely look like the output's
+    temporaries are never deleted by the stale-temporary clean-up; nor is
+    the input even when its name is one a writer could have made."""
+    src = tmp_path / ".o.exr.tmp-1-ab"
+    scene = tmp_path / ".o.exr.tmp-2-cd"
+    shutil.copy(blender_render / "render.exr", src)
+    shutil.copy(blender_render / "scene.json", scene)
+    run(sss_cmd, src, "-o", tmp_path / "o.exr", "--scene", scene, check=0)
+    only(tmp_path, src.name, scene.name, "o.exr")
+    named = tmp_path / temp_name("p.exr", pid=1, ident=2)
+    shutil.copy(blender_render / "render.exr", named)
+    run(sss_cmd, named, "-o", tmp_path / "p.exr", "--scene", scene, check=0)
+    assert named.exists()
+
+
+# ------------------------------------------- second round: farms, limits
+
+def test_file_size_limit_signal_removes_the_temporary(sss_cmd, blender_render,
+                                                      tmp_path):
+    """ulimit -f as a farm sets it, SIGXFSZ at its default: the command
+    says so, removes its temporary and dies of the signal."""
+    import resource
+
+    def small_disk():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))
+
+    out = tmp_path / "out.exr"
+    proc = subprocess.run([sss_cmd, *map(str, args_for(
+        blender_render, blender_render / "render.exr", out))],
+        capture_output=True, text=True, preexec_fn=small_disk, timeout=HANG)
+    assert proc.returncode == -signal.SIGXFSZ, (proc.returncode, proc.stderr)
+    assert "stopped by SIGXFSZ" in proc.stderr and "ulimit -f" in \
+        proc.stderr, proc.stderr
+    assert "removed the unfinished" in proc.stderr
+    only(tmp_path)
+
+
+def test_cpu_time_limit_signal_is_said(sss_cmd, blender_render, big_render,
+                                       tmp_path):
+    """ulimit -t: SIGXCPU at the soft limit is reported, nothing is left."""
+    import resource
+
+    def one_second():
+        resource.setrlimit(resource.RLIMIT_CPU, (1, 60))
+
+    proc = subprocess.run([sss_cmd, *map(str, args_for(
+        blender_render, big_render, tmp_path / "out.exr", "--method",
+        "reference", "--threads", "1", "--radius-scale", "30"))], capture_output=True, text=True,
+        preexec_fn=one_second, timeout=120)
+    assert proc.returncode == -signal.SIGXCPU, (proc.returncode, proc.stderr)
+    assert "stopped by SIGXCPU" in proc.stderr and "ulimit -t" in proc.stderr
+    only(tmp_path)
+
+
+def test_replaced_output_keeps_its_mode(sss_cmd, blender_render, tmp_path):
+    out = tmp_path / "out.exr"
+    out.write_bytes(b"an earlier result")
+    out.chmod(0o640)
+    run(sss_cmd, *args_for(blender_render, blender_render / "render.exr",
+                           out), check=0)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o640
+    assert "SSS.Combined.R" in read_channels(out)[0]
+
+
+def test_unwritable_folder_is_said_before_the_work(sss_cmd, blender_render,
+                                                   tmp_path):
+    """A folder that takes no new file (procfs: not even root may create
+    one there; a 0555 folder for other users) is said before the frame is
+    read or scattered."""
+    folders = ["/proc"]
+    if os.geteuid() != 0:
+        locked = tmp_path / "locked"
+        locked.mkdir(mode=0o555)
+        folders.append(str(locked))
+    for folder in folders:
+        proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                      "render.exr", folder + "/out.exr"),
+                   check=1)
+        assert f"its folder {folder} is not writable" in proc.stderr, \
+            proc.stderr
+        assert "->" not in proc.stdout
+
+
+COUNT_THREADS = r"""
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+static int started;
+int pthread_create(pthread_t *t, const pthread_attr_t *a,
+                   void *(*fn)(void *), void *arg)
+{
+    int (*real)(pthread_t *, const pthread_attr_t *, void *(*)(void *),
+                void *) = dlsym(RTLD_NEXT, "pthread_create");
+    __atomic_add_fetch(&started, 1, __ATOMIC_SEQ_CST);
+    return real(t, a, fn, arg);
+}
+__attribute__((destructor)) static void report(void)
+{
+    FILE *f = fopen(getenv("THREADS_REPORT"), "w");
+    if (f) { fprintf(f, "%d\n", started); fclose(f); }
+}
+"""
+
+
+def threads_started(sss_cmd, args, tmp_path, shim, cpus=None):
+    report = tmp_path / "threads.txt"
+    env = dict(os.environ, LD_PRELOAD=str(shim), THREADS_REPORT=str(report),
+               ASAN_OPTIONS=os.environ.get("ASAN_OPTIONS", "") +
+               ":verify_asan_link_order=0")
+    proc = subprocess.run([sss_cmd, *map(str, args)], env=env,
+                          capture_output=True, text=True, timeout=HANG,
+                          preexec_fn=(lambda: os.sched_setaffinity(0, cpus))
+                          if cpus else None)
+    assert proc.returncode == 0, proc.stderr
+    return int(report.read_text())
+
+
+def test_threads_hold_for_the_exr_coder(sss_cmd, blender_render, big_render,
+                                        tmp_path):
+    """--threads 1 runs everything on one thread, the EXR decode and
+    encode included; "all cores" is the CPUs of the affinity mask."""
+    if not shutil.which("cc"):
+        pytest.skip("no C compiler for the pthread_create counter")
+    shim = tmp_path / "count.so"
+    (tmp_path / "count.c").write_text(COUNT_THREADS)
+    subprocess.run(["cc", "-shared", "-fPIC", "-o", str(shim),
+                    str(tmp_path / "count.c"), "-ldl"], check=True)
+    args = args_for(blender_render, big_render, tmp_path / "out.exr", "-q")
+    assert threads_started(sss_cmd, [*args, "--threads", "1"], tmp_path,
+                           shim) == 0
+    assert threads_started(sss_cmd, [*args, "--threads", "2"], tmp_path,
+                           shim) > 0  # the counter counts
+    assert threads_started(sss_cmd, [*args, "--threads", "0"], tmp_path,
+                           shim, cpus={0}) == 0
+
+
+# ------------------------------------------- second round: memory bombs
+
+def with_extra_channels(blender_render, path, extra, size=None):
+    """The render (cropped to size x size around its middle) with `extra`
+    more one-component passes in a layer of their own."""
+    ch, spec = read_channels(blender_render / "render.exr")
+    w, h = spec.width, spec.height
+    if size:
+        y0, x0 = (h - size) // 2, (w - size) // 2
+        ch = {k: v[y0:y0 + size, x0:x0 + size] for k, v in ch.items()}
+        w = h = size
+    zero = np.zeros((h, w), np.float32)
+    for i in range(extra):
+        ch[f"Extra.P{i:05d}.V"] = zero
+    write_channels(path, ch, w, h)
+    return len(ch)
+
+
+def test_channel_and_memory_limits_from_the_header(sss_cmd, blender_render,
+                                                   tmp_path):
+    src = tmp_path / "many.exr"
+    total = with_extra_channels(blender_render, src, 4100, size=4)
+    proc = run(sss_cmd, *args_for(blender_render, src, tmp_path / "o.exr"),
+               check=1)
+    assert f"{total} channels, more than the limit of 4096" in proc.stderr
+    assert "--max-channels" in proc.stderr, proc.stderr
+    run(sss_cmd, *args_for(blender_render, src, tmp_path / "o.exr",
+                           "--max-channels", str(total)), check=0)
+    # memory: the 64x64 render's channels at 4 bytes, against 64 KiB
+    proc = run(sss_cmd, *args_for(blender_render, blender_render /
+                                  "render.exr", tmp_path / "o2.exr",
+                                  "--max-memory", "64K"), check=1)
+    ch, spec = read_channels(blender_render / "render.exr")
+    mib = spec.width * spec.height * len(ch) * 4 / 2 ** 20
+    assert f"{mib:.2f} MiB decoded, more than the limit of 0.06 MiB" in \
+        proc.stderr, proc.stderr
+    assert "--max-memory" in proc.stderr, proc.stderr
+    assert not (tmp_path / "o2.exr").exists()
+    for bad in ("12Q", "-1G", "", "G"):
+        proc = run(sss_cmd, *args_for(blender_render, src, tmp_path /
+                                      "o3.exr", "--max-memory", bad), check=2)
+        assert "--max-memory" in proc.stderr
+
+
+def test_openexr_channel_ceiling_refused_before_work(sss_cmd, blender_render,
+                                                     tmp_path):
+    """OpenEXRCore 3.1 counts a part's channels in 16 bits: an output
+    past 32767 channels was written empty or scrambled with exit 0."""
+    src = tmp_path / "ceiling.exr"
+    base = len(read_channels(blender_render / "render.exr")[0])
+    total = with_extra_channels(blender_render, src, 32765 - base, size=2)
+    assert total == 32765
+    proc = run(sss_cmd, *args_for(blender_render, src, tmp_path / "o.exr",
+                                  "--max-channels", "40000"), check=1)
+    assert f"{total + 7} channels with the result's 7, more than the " \
+        "32767 one file can hold" in proc.stderr, proc.stderr
+    assert "->" not in proc.stdout
+    only(tmp_path, "ceiling.exr")
+
+
+# ------------------------------------------- second round: messages
+
+def scene_with(blender_render, tmp_path, name, change):
+    scene = json.loads((blender_render / "scene.json").read_text())
+    change(scene)
+    path = tmp_path / name
+    path.write_text(json.dumps(scene))
+    return path
+
+
+def test_support_cap_past_int32_names_its_range(sss_cmd, blender_render,
+                                                tmp_path):
+    scene = scene_with(blender_render, tmp_path, "s.json",
+                       lambda s: s.update(max_support_px=2147483648))
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=2)
+    assert "2.14748e+09 is out of range (must be 1..2147483647)" in \
+        proc.stderr, proc.stderr
+
+
+def test_json_keys_match_strictly(sss_cmd, blender_render, tmp_path):
+    """"unit_scale\\u0000junk" is not unit_scale (cJSON's strings end at
+    the NUL): refused, with where it is."""
+    text = (blender_render / "scene.json").read_text()
+    scene = tmp_path / "s.json"
+    scene.write_text(text.replace("{", '{"unit_scale\\u0000junk": 1000, ',
+                                  1))
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=2)
+    assert "\\u0000" in proc.stderr and "line 1" in proc.stderr, proc.stderr
+
+
+def test_json_values_are_bounded(sss_cmd, blender_render, tmp_path):
+    """A 6 MB array took 248 MB in the parser; refused before parsing."""
+    scene = tmp_path / "s.json"
+    scene.write_text('{"junk": [' + "0," * 3000000 + '0]}')
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=2)
+    assert "more than 2097152 JSON values" in proc.stderr, proc.stderr
+
+
+def test_control_characters_in_names_are_shown_escaped(sss_cmd,
+                                                       blender_render,
+                                                       tmp_path):
+    """A material or layer name with ESC, CR or LF: printed as \\xNN, so
+    no terminal escape runs and no fake line can be made."""
+    evil = "Skin\x1b[31m\r\nsss: error: fake"
+
+    def rename(s):
+        s["materials"][0]["name"] = evil
+    scene = scene_with(blender_render, tmp_path, "s.json", rename)
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o.exr", "--scene", scene, check=0)
+    assert "Skin\\x1b[31m\\x0d\\x0asss: error: fake" in proc.stdout, \
+        proc.stdout
+    proc = run(sss_cmd, blender_render / "render.exr", "-o",
+               tmp_path / "o2.exr", "--scene", scene, "-l", evil, check=1)
+    for text in (proc.stdout, proc.stderr):
+        assert "\x1b" not in text and "\r" not in text
+        assert not any(line.startswith("sss: error: fake")
+                       for line in text.splitlines()), text
+    assert "\\x1b" in proc.stderr
+
+
+# ------------------------------------------- second round: frame patterns
+
+def test_every_run_of_hashes_and_a_literal_hash(sss_cmd, blender_render,
+                                                tmp_path):
+    for f in (1, 2):
+        os.symlink(blender_render / "render.exr", tmp_path / f"in_{f:02d}.exr")
+    run(sss_cmd, tmp_path / "in_##.exr", "--frames", "1-2", "-o",
+        str(tmp_path / "o_##_###") + "\\#.exr", "--scene",
+        blender_render / "scene.json", "-q", check=0)
+    assert sorted(p.name for p in tmp_path.glob("o_*")) == [
+        "o_01_001#.exr", "o_02_002#.exr"]
+
+
+def test_output_that_is_another_frames_input_is_refused_first(
+        sss_cmd, blender_render, tmp_path):
+    """-o in_1###.exr --frames 1,1001: frame 1's output is frame 1001's
+    input; said before any frame is written."""
+    for f in (1, 1001):
+        shutil.copy(blender_render / "render.exr", tmp_path / f"in_{f:04d}.exr")
+    before = (tmp_path / "in_1001.exr").read_bytes()
+    proc = run(sss_cmd, tmp_path / "in_####.exr", "--frames", "1,1001", "-o",
+               tmp_path / "in_1###.exr", "--scene",
+               blender_render / "scene.json", check=2)
+    assert "frame 1's output" in proc.stderr and "frame 1001's input" in \
+        proc.stderr, proc.stderr
+    assert (tmp_path / "in_1001.exr").read_bytes() == before
+    only(tmp_path, "in_0001.exr", "in_1001.exr")
