@@ -163,6 +163,30 @@ static void test_retune(void)
 	CHECK_STATUS("frame.write-null", SSS_ERR_INVALID_ARGUMENT,
 	             sss_frame_write(frame, out, NULL, light, NULL, err,
 	                             sizeof err));
+	/* A file that is already an output (it has the result layer): its
+	 * passes can be re-tuned, only writing it back is refused. */
+	sss_frame *again = NULL;
+	char p1[128];
+	tpath(p1, sizeof p1, "p1.exr");
+	CHECK_STATUS("frame.output-read", SSS_OK,
+	             sss_frame_read(p1, NULL, NULL, &again, err, sizeof err));
+	if (again) {
+		sss_process_options_default(&opt);
+		CHECK_STATUS("frame.output-scatter", SSS_OK,
+		             sss_frame_scatter(again, scene, &opt, &oc, &ol, NULL,
+		                               err, sizeof err));
+		CHECK("frame.output-same", same_bits(combined, want1, n * 4),
+		      "the output's passes scatter differently");
+		tpath(out, sizeof out, "again.exr");
+		CHECK_STATUS("frame.output-write", SSS_ERR_INVALID_ARGUMENT,
+		             sss_frame_write(again, out, combined, light, NULL, err,
+		                             sizeof err));
+		CHECK("frame.output-says", strstr(err, "result layer") != NULL,
+		      "%s", err);
+		CHECK("frame.output-nothing", access(out, F_OK) != 0,
+		      "a refused write left %s", out);
+		sss_frame_free(again);
+	}
 	free(combined);
 	free(light);
 done:
