@@ -58,7 +58,26 @@ typedef struct table {
 	float *sparse_at, *sparse_w; /* sparse_w: [t * PARAMS + p] */
 	/* Half-widths of the pixels that use dense rows, both axes. */
 	double r_min, r_max;
+	/* Per axis, pixels whose kernel a limit cut (max_support_px): one
+	 * half-width, weights depending on the scene units per pixel only,
+	 * tabulated over its logarithm (CAP_STEPS rows a unit, interpolated)
+	 * for the depths those pixels have. */
+	struct capped {
+		double r;          /* the cut half-width, pixels; 0 = no table */
+		double lu0;        /* log(units per pixel) of row 0 */
+		int32_t n, rows;   /* taps right of the centre; rows */
+		float *at;         /* n + 1 offsets in units of r */
+		float *wa;         /* rows x (n + 1) x PARAMS */
+		double z_lo, z_hi; /* the depths to cover (scan_half_widths) */
+	} cap[2];
 } table;
+
+/* Rows a unit of log(units per pixel) in a cut kernel's table (steps of
+ * 0.1 %: on a 1080p head at twice its radius the result moves by at most
+ * 5e-6, against the weights made per pixel), and the most rows one may
+ * have (depths up to e^8 apart; farther ranges make them per pixel). */
+#define CAP_STEPS 1024.0
+#define CAP_MAX_ROWS 8192
 
 /* The taps' weights W (mass over the cell [x - below, x + above] pixels on
  * a plane facing the camera) and falloff coefficients A / 8, for upp scene
@@ -185,6 +204,10 @@ static void table_free(table *t)
 	free(t->dense);
 	free(t->sparse_at);
 	free(t->sparse_w);
+	for (int a = 0; a < 2; a++) {
+		free(t->cap[a].at);
+		free(t->cap[a].wa);
+	}
 }
 
 /* One orientation of the working data: rows run along the pass axis. */
@@ -226,6 +249,70 @@ static double half_width(const sss__job *job, const sss__kernel *k,
 		*capped = 1;
 	}
 	return r;
+}
+
+/* The table of a kernel's cut pixels along one axis (tables[].cap[a]):
+ * the layout of the cut half-width r and, for units per pixel from the
+ * nearest such pixel's to the farthest's, every tap's weights. Nothing
+ * when no pixel is cut, when the budget is too large to tabulate, or when
+ * the depths are not usable (those pixels make their weights one by
+ * one). */
+static sss_result cap_build(const sss__job *job, const sss__kernel *k,
+                            const axis *ax, int32_t len, struct capped *c)
+{
+	double r = fmin(job->max_support_px, len);
+	double z_lo = c->z_lo, z_hi = c->z_hi;
+	c->r = 0.0;
+	if (!(z_lo > 0.0 && z_lo <= z_hi && isfinite(z_hi)) ||
+	    (k->taps - 1) / 2 > SSS__MAX_HALF_TAPS)
+		return SSS_OK;
+	double u_lo = ax->ortho ? 1.0 / ax->f : z_lo / ax->f;
+	double u_hi = ax->ortho ? 1.0 / ax->f : z_hi / ax->f;
+	double span = log(u_hi) - log(u_lo);
+	if (!(u_lo > 0.0) || !isfinite(span))
+		return SSS_OK;
+	int32_t rows = (int32_t)ceil(span * CAP_STEPS) + 2;
+	if (rows > CAP_MAX_ROWS)
+		return SSS_OK;
+	sss__tap tap[SSS__MAX_HALF_TAPS + 1];
+	int32_t n = sss__tap_layout(k->taps, r, tap);
+	c->at = malloc((size_t)(n + 1) * sizeof *c->at);
+	c->wa = malloc((size_t)rows * (n + 1) * PARAMS * sizeof *c->wa);
+	if (!c->at || !c->wa)
+		return SSS_ERR_OUT_OF_MEMORY;
+	for (int32_t t = 0; t <= n; t++)
+		c->at[t] = (float)(tap[t].offset / r);
+	c->lu0 = log(u_lo);
+	for (int32_t j = 0; j < rows; j++) {
+		double upp = exp(c->lu0 + j / CAP_STEPS);
+		for (int32_t t = 0; t <= n; t++) {
+			float *p = c->wa + ((size_t)j * (n + 1) + t) * PARAMS;
+			tap_weights(k, tap[t].offset, tap[t].offset - tap[t].lo,
+			            tap[t].hi - tap[t].offset, upp, p, p + 3);
+		}
+	}
+	c->n = n;
+	c->rows = rows;
+	c->r = r;
+	return SSS_OK;
+}
+
+/* A cut pixel's tap weights into wa from its table, interpolated at upp
+ * units per pixel; 0 if upp lies outside the table. */
+static int cap_weights(const struct capped *c, double upp, float *wa)
+{
+	double x = (log(upp) - c->lu0) * CAP_STEPS;
+	if (!(x >= 0.0 && x <= c->rows - 1))
+		return 0;
+	int32_t j = (int32_t)x;
+	if (j > c->rows - 2)
+		j = c->rows - 2;
+	float f = (float)(x - j);
+	size_t m = (size_t)(c->n + 1) * PARAMS;
+	const float *r0 = c->wa + (size_t)j * m, *r1 = r0 + m;
+	for (size_t i = 0; i < m; i++)
+		wa[i] = r0[i] + f * (r1[i] - r0[i]);
+	return 1;
 }
 
 /* Per band of rows: room for one pixel's per-pixel taps and its list of
@@ -365,9 +452,16 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 		if (!capped && r >= t->half + 0.5) {
 			list_samples(&b, pl->len, t->half, t->sparse_at, r, t->sparse_w,
 			             &sc->list);
+		} else if (capped && t->cap[!ctx->first].r == r &&
+		           cap_weights(&t->cap[!ctx->first],
+		                       ax->ortho ? 1.0 / ax->f : zc / ax->f,
+		                       sc->wa)) {
+			/* A limit cut the kernel: its weights from the table. */
+			list_samples(&b, pl->len, t->cap[!ctx->first].n,
+			             t->cap[!ctx->first].at, r, sc->wa, &sc->list);
 		} else {
-			/* Weights for this pixel alone: a limit cut the kernel, or
-			 * the tap budget is too large to tabulate. */
+			/* Weights for this pixel alone: the tap budget is too large
+			 * to tabulate, or the depth lies outside the table. */
 			double ppu = ax->ortho ? ax->f : ax->f / zc;
 			int32_t n = sss__tap_layout(k->taps, r, sc->tap);
 			for (int32_t s = 0; s <= n; s++) {
@@ -558,6 +652,15 @@ static sss_result scan_half_widths(const sss__job *job, const axis ax[2],
 			/* Dense pixels are the uncapped ones in [1, half + 0.5). */
 			double hi = capped_near ? fmin(job->max_support_px, len) : r_near;
 			double lo = r_far < 1.0 ? 1.0 : r_far;
+			/* Cut pixels: from the nearest to where the cut ends. */
+			t->cap[a].z_lo = t->cap[a].z_hi = 0.0;
+			if (capped_near) {
+				t->cap[a].z_lo = zmin;
+				t->cap[a].z_hi = capped_far || ax[a].ortho ? zmax
+				                 : fmin(zmax, k->support * ax[a].f /
+				                                  fmin(job->max_support_px,
+				                                       len));
+			}
 			hi = hi < half + 0.5 ? hi : half + 0.5;
 			if (!(lo <= hi))
 				continue;
@@ -618,10 +721,16 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	if ((r = scan_half_widths(job, ax, tables, count, num_threads)))
 		goto done;
 	r = SSS_ERR_OUT_OF_MEMORY;
-	for (int32_t m = 0; m < count; m++)
-		if (job->kernels[m].support > 0.0 &&
-		    (r = table_build(&job->kernels[m], &tables[m])))
+	for (int32_t m = 0; m < count; m++) {
+		if (!(job->kernels[m].support > 0.0))
+			continue;
+		if ((r = table_build(&job->kernels[m], &tables[m])))
 			goto done;
+		for (int a = 0; a < 2; a++)
+			if ((r = cap_build(job, &job->kernels[m], &ax[a],
+			                   a ? h : w, &tables[m].cap[a])))
+				goto done;
+	}
 
 	const char *simd = getenv("SSS_SIMD");
 	int avx2 = !(simd && strcmp(simd, "scalar") == 0) &&

@@ -822,6 +822,52 @@ static void test_orthographic(void)
 	synth_free(s);
 }
 
+/* A kernel cut by max_support_px takes its weights from a table over the
+ * depths of the cut pixels (sss_separable.c, cap_build); where those
+ * depths span too much for a table, every pixel makes its own. The two
+ * agree: the same slanted object, once alone (tabulated) and once with a
+ * far copy of its material out of reach on screen (depths 4000 times
+ * apart: made per pixel). */
+static void test_cut_kernel_table(void)
+{
+	int w = 160, h = 40;
+	synth *a = synth_new(w, h), *b = synth_new(w, h);
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < 60; x++) {
+			float z = 1.0f + 0.005f * (float)x;
+			synth_plane(a, x, y, x + 1, y + 1, z, 1.0f);
+			synth_plane(b, x, y, x + 1, y + 1, z, 1.0f);
+		}
+	synth_plane(b, 120, 0, w, h, 4000.0f, 1.0f);
+	synth_noise(a, 0, 1, 17);
+	memcpy(b->diff_dir, a->diff_dir, (size_t)3 * w * h * sizeof(float));
+	/* Wide enough to be cut at the far copy too. */
+	sss_material m = material_px(SSS_PROFILE_BURLEY, 1, 40000.0, w, 1.0);
+	sss_options o = options(SSS_METHOD_SEPARABLE);
+	o.max_support_px = 8;
+	run ra = apply(a, &m, 1, &o), rb = apply(b, &m, 1, &o);
+	double worst = 0.0, moved = 0.0;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < 60; x++)
+			for (int c = 0; c < 3; c++) {
+				size_t i = 3 * ((size_t)y * w + x) + c;
+				worst = fmax(worst, fabs((double)ra.light[i] - rb.light[i]) /
+				                    fmax(fabs((double)rb.light[i]), 1e-3));
+				moved = fmax(moved, fabs((double)ra.light[i] -
+				                         a->diff_dir[i]));
+			}
+	CHECK("cut-table-scatters", ra.status == SSS_OK && moved > 0.05,
+	      "the cut kernel left the light as it was (%g)", moved);
+	CHECK("cut-table-vs-per-pixel", rb.status == SSS_OK && worst < 5e-6,
+	      "tabulated vs per-pixel weights: %g relative", worst);
+	printf("report: cut kernel, table vs per-pixel weights: %.2e relative\n",
+	       worst);
+	run_free(&ra);
+	run_free(&rb);
+	synth_free(a);
+	synth_free(b);
+}
+
 int main(void)
 {
 	test_constant();
@@ -839,5 +885,6 @@ int main(void)
 	test_sphere_vs_reference();
 	test_simd_matches_scalar();
 	test_orthographic();
+	test_cut_kernel_table();
 	return tu_finish("test_blur");
 }
