@@ -173,10 +173,8 @@ const sss_exr *sss_frame_exr(const sss_frame *frame)
 	return frame ? frame->exr : NULL;
 }
 
-/* The scene's options with the process options' overrides. */
-static sss_result merged_options(const sss_scene *scene,
-                                 const sss_process_options *opt,
-                                 sss_options *o, char *err, size_t errlen)
+sss_result sss__process_options_check(const sss_process_options *opt,
+                                      char *err, size_t errlen)
 {
 	if (opt->struct_size != sizeof *opt)
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
@@ -186,6 +184,17 @@ static sss_result merged_options(const sss_scene *scene,
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "radius scale %g must be finite and >= 0",
 		                 (double)opt->radius_scale);
+	return SSS_OK;
+}
+
+/* The scene's options with the process options' overrides. */
+static sss_result merged_options(const sss_scene *scene,
+                                 const sss_process_options *opt,
+                                 sss_options *o, char *err, size_t errlen)
+{
+	sss_result r = sss__process_options_check(opt, err, errlen);
+	if (r)
+		return r;
 	*o = *sss_scene_options(scene);
 	if (opt->method >= 0)
 		o->method = opt->method;

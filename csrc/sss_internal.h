@@ -77,6 +77,10 @@ extern const float sss__deon_weight[6][3];
  * ceiling. */
 sss_result sss__frame_check_result(const sss_frame *frame, char *err,
                                    size_t errlen);
+/* The process options' own checks (struct size, radius scale), before
+ * any work (sss_frame.c). */
+sss_result sss__process_options_check(const sss_process_options *opt,
+                                      char *err, size_t errlen);
 /* Removes every pass of a layer from an EXR image (sss_exr.c). */
 void sss__exr_remove_layer(sss_exr *exr, const char *layer);
 

@@ -74,22 +74,16 @@ sss_result sss_process_exr(const char *in, const char *out,
 	if (!in || !out || !scene)
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "input, output and scene are required");
-	if (opt.struct_size != sizeof opt)
-		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
-		                 "process options: struct_size %u, expected %zu",
-		                 opt.struct_size, sizeof opt);
-	if (!(isfinite(opt.radius_scale) && opt.radius_scale >= 0.0f))
-		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
-		                 "radius scale %g must be finite and >= 0",
-		                 (double)opt.radius_scale);
+	sss_result ok = sss__process_options_check(&opt, err, errlen);
+	if (ok)
+		return ok;
 	if (same_file(in, out))
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "%s: output is the input file; refusing to "
 		                 "overwrite it", in);
 	/* The output can be written (its folder takes a new file): said
 	 * before the frame is read and scattered, not after. */
-	sss_result ok = sss_exr_check_output(out, err, errlen);
-	if (ok)
+	if ((ok = sss_exr_check_output(out, err, errlen)))
 		return ok;
 
 	sss_timings t = {0, 0, 0};

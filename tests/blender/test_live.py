@@ -11,19 +11,14 @@ import bpy
 import numpy as np
 import pytest
 
-from helpers import BUILD, build_blend, compat, load_addon
+from helpers import BUILD, build_blend, compat, load_addon, registered
 
 separable_sss = load_addon()
 from separable_sss import live, nodes, pipeline  # noqa: E402
 
 from exr import read_channels  # noqa: E402
 
-
-@pytest.fixture(scope="module", autouse=True)
-def addon():
-    separable_sss.register()
-    yield
-    separable_sss.unregister()
+addon = registered(separable_sss)
 
 
 @pytest.fixture(scope="module")
