@@ -44,6 +44,8 @@ class Kept:
     # re-tunes take its camera and materials with the open scene's method
     # and radius scale; None: the open scene's own description.
     fixed: dict = None
+    # Per material, the scene radius scale its back light was rendered at.
+    baked: dict = None
 
 
 _kept = {}        # scene name -> Kept
@@ -74,19 +76,35 @@ def clear():
         drop(name)
 
 
-def description_text(scene):
+BAKED = "transmission_baked_scale"
+
+
+def description(scene):
     """The scene description as the library reads it, computed without
-    changing anything (pass indices as a render with SSS assigns them):
-    what a re-tune scatters with."""
+    changing anything (pass indices as a render with SSS assigns them)."""
     found = analyse(scene)
     assign_pass_indices(found)
-    return json.dumps(scene_description(scene, found), sort_keys=True)
+    return scene_description(scene, found)
+
+
+def description_text(scene, baked=None):
+    """What a re-tune scatters with: description() as JSON text. baked
+    ({material name: radius scale}): the scale each material's back light
+    was rendered at (a material not in it had none baked), which a
+    re-tune cannot change; None: as the scene is now."""
+    desc = description(scene)
+    if baked is not None:
+        for entry in desc["materials"]:
+            entry.pop(BAKED, None)
+            if entry["name"] in baked:
+                entry[BAKED] = baked[entry["name"]]
+    return json.dumps(desc, sort_keys=True)
 
 
 def _entry_text(scene, entry):
     """What a re-tune of the entry scatters with."""
     if entry.fixed is None:
-        return description_text(scene)
+        return description_text(scene, entry.baked)
     desc = dict(entry.fixed)
     desc["radius_scale"] = float(entry.fixed.get("radius_scale", 1.0)) * \
         scene.sss.radius_scale
@@ -97,14 +115,18 @@ def _entry_text(scene, entry):
 def keep(scene, view_layer, frame, combined, fixed=None):
     """Keeps a frame read for a render with SSS (pipeline.scatter) or from
     a file, and its result (None: to be scattered), replacing what the
-    scene held."""
+    scene held. A render's back light stays at the radius it was rendered
+    with (the library refuses another scene radius scale for it)."""
     drop(scene.name)
     scattered = combined is not None
     if not scattered:
         combined = np.zeros((frame.height, frame.width, 4), np.float32)
     entry = Kept(frame, view_layer, combined, fixed=fixed)
-    if scattered and fixed is None:
-        entry.description = description_text(scene)
+    if fixed is None:
+        entry.baked = {m["name"]: m[BAKED]
+                       for m in description(scene)["materials"] if BAKED in m}
+        if scattered:
+            entry.description = description_text(scene, entry.baked)
     _kept[scene.name] = entry
     return entry
 

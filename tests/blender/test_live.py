@@ -90,7 +90,7 @@ def test_retune_in_memory_equals_the_command(blend, tmp_path):
 
     # The `sss` command on the same passes and description.
     desc = tmp_path / "live.json"
-    desc.write_text(live.description_text(scene))
+    desc.write_text(live.kept(scene).description)
     passes = pipeline.paths_for(scene, scene.frame_current)[0]
     out = str(tmp_path / "cli.exr")
     proc = subprocess.run([os.path.join(BUILD, "sss"), passes, "-o", out,
@@ -242,7 +242,7 @@ def test_own_settings_schedule_a_retune(blend, tmp_path):
         if not isinstance(mat, bpy.types.Material) else mat
     for owner, name, value in ((mat.sss, "radius_scale", 2.0),
                                (scene.sss, "method", 'SEPARABLE'),
-                               (scene.sss, "radius_scale", 0.5)):
+                               (scene.sss, "radius_scale", 0.0)):
         live._pending.clear()
         setattr(owner, name, value)
         assert scene.name in live._pending, name
@@ -252,4 +252,24 @@ def test_own_settings_schedule_a_retune(blend, tmp_path):
     time.sleep(live.SETTLE_SECONDS * 1.5)
     live._pending[scene.name] = 0.0
     live._settled()
-    assert live.kept(scene).timings["methods"]
+    assert live.kept(scene).timings["scatter"] >= 0.0
+
+
+def test_back_light_keeps_the_rendered_radius(blend, tmp_path):
+    """A back light rendered at the scene's radius scale (the Burley
+    transmission bakes it) cannot follow another scale: a re-tune at one
+    says so and names what to do, and 0 (no scattering) still goes."""
+    scene = open_rendered(blend, tmp_path)
+    entry = live.kept(scene)
+    if not entry.baked:
+        pytest.skip("no material of this scene bakes its back light")
+    assert set(entry.baked.values()) == {1.0}
+    scene.sss.radius_scale = 2.0
+    with pytest.raises(pipeline.SSSError, match="render it again"):
+        live.retune(scene)
+    live._pending[scene.name] = 0.0
+    live._settled()
+    assert "render it again" in live.last_error[scene.name]
+    scene.sss.radius_scale = 0.0
+    assert live.retune(scene)["scatter"] >= 0.0
+    assert scene.name not in live.last_error
