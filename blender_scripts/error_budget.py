@@ -32,6 +32,9 @@ noise taken out:
 - crevices: blocks whose surface is concave at the scale of the
   material's radius (the mean curvature from the Position pass times the
   largest radius below -0.05: grooves, sockets, the inside of a ring);
+- edges: blocks with a sharp convex edge between faces the camera sees
+  (that curvature times the radius above 2: far sharper than any
+  rounded object at its own scale);
 - the rest.
 Each line: its share of the squared error (with the reference's noise in
 those blocks taken out; shares may be negative where that noise is larger
@@ -39,7 +42,8 @@ than the error), the share of blocks, and the RMSE there.
 
 Writes DIR/budget.json, DIR/budget.md and DIR/errors.png (reference, ours
 + OIDN, |error| at quarter resolution on one scale, the blocks' causes:
-red silhouettes, blue transmission, green crevices, grey the rest). With
+red silhouettes, blue transmission, green crevices, yellow edges, grey
+the rest). With
 --summary, DIR/summary.md gathers every DIR/*/budget.json.
 """
 import argparse
@@ -56,9 +60,10 @@ import numpy as np  # noqa: E402
 
 from script_cli import run_main, script_argv  # noqa: E402
 
-CAUSES = ("silhouettes", "transmission", "crevices", "rest")
+CAUSES = ("silhouettes", "transmission", "crevices", "edges", "rest")
 TRANSMISSION_SHARE = 0.05
 CONCAVE_X = -0.05
+CONVEX_EDGE_X = 2.0
 
 
 def log(*a):
@@ -164,9 +169,11 @@ def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x):
     edges = cm.silhouettes(idx, depth)
     qe = down(edges.astype(np.float64)) > 0
     qt = down(np.nan_to_num(back_share) * mask) >= TRANSMISSION_SHARE
-    qc = down(np.where(np.isfinite(curv_x), curv_x, 0.0) * mask) < CONCAVE_X
-    cause = np.full(qo.shape[:2], 3)
-    for i, sel in reversed(list(enumerate((qe, qt, qc)))):
+    cx = np.where(np.isfinite(curv_x), curv_x, 0.0) * mask
+    qc = down(cx) < CONCAVE_X
+    qv = down((cx > CONVEX_EDGE_X).astype(np.float64)) > 0
+    cause = np.full(qo.shape[:2], len(CAUSES) - 1)
+    for i, sel in reversed(list(enumerate((qe, qt, qc, qv)))):
         cause[sel] = i
     cause[~cover] = -1
     rows = {"calibration": dict(share=cal / total if total > 0 else np.nan,
@@ -342,10 +349,10 @@ def picture(path, ref, ours, qerr, cause, mask):
     up = np.kron(qerr, np.ones((4, 4)))
     e = np.clip(up / max(np.percentile(qerr[cause >= 0], 99), 1e-6), 0, 1)
     colours = np.array([[0.9, 0.2, 0.2], [0.2, 0.4, 1.0], [0.2, 0.9, 0.3],
-                        [0.5, 0.5, 0.5]])
+                        [1.0, 0.8, 0.1], [0.5, 0.5, 0.5]])
     c = np.zeros((h4 * 4, w4 * 4, 3))
     cu = np.kron(cause, np.ones((4, 4), int))
-    for i in range(4):
+    for i in range(len(CAUSES)):
         c[cu == i] = colours[i]
     h, w = h4 * 4, w4 * 4
     row = np.concatenate([show(ref[:h, :w]), show(ours[:h, :w]),
@@ -357,13 +364,15 @@ def picture(path, ref, ours, qerr, cause, mask):
 
 
 def markdown(results):
-    out = ["| scene | ours + OIDN, quarter-res RMSE | calibration | "
-           "silhouettes | transmission | crevices | rest |",
-           "|---|---|---|---|---|---|---|"]
+    out = ["| scene | ours + OIDN, quarter-res RMSE | calibration | " +
+           " | ".join(CAUSES) + " |", "|---|---|" + "---|" * (1 + len(CAUSES))]
     for r in results:
         b = r["budget"]
         cells = [f"{100 * b['calibration']['share']:.0f} %"]
         for k in CAUSES:
+            if k not in b:
+                cells.append("")
+                continue
             cells.append(f"{100 * b[k]['share']:.0f} % ({100 * b[k]['blocks']:.0f} % "
                          f"of blocks, {b[k]['rmse']:.3f})")
         out.append(f"| {r['scene']} | {b['total']['rmse']:.4f} | " +

@@ -67,3 +67,16 @@ def test_back_light_and_concave_blocks_are_told_apart():
     assert abs(rows["transmission"]["share"] - 0.5) < 0.05
     assert abs(rows["crevices"]["share"] - 0.5) < 0.05
     assert rows["transmission"]["blocks"] == rows["crevices"]["blocks"] > 0
+
+
+def test_a_sharp_convex_edge_is_an_edge_not_a_crevice():
+    ref, idx, depth, mask, _ = frame()
+    idx[:] = 1                    # one material: no silhouette
+    curv = np.zeros(mask.shape)
+    curv[:, 10:12] = 50.0         # a sharp edge across the frame
+    ours = ref.copy()
+    rng = np.random.default_rng(3)   # in the blocks holding it
+    ours[:, 8:12] += rng.normal(0, 0.05, (ref.shape[0], 4, 3))
+    rows, _ = split(ours, ref, idx, depth, mask, curv=curv)
+    assert rows["edges"]["share"] > 0.95
+    assert rows["crevices"]["share"] == 0.0
