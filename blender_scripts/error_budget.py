@@ -38,7 +38,9 @@ noise taken out:
 - the rest.
 Each line: its share of the squared error (with the reference's noise in
 those blocks taken out; shares may be negative where that noise is larger
-than the error), the share of blocks, and the RMSE there.
+than the error), the share of blocks, the RMSE there and the render
+without SSS's (denoised) in the same blocks: where the two are alike the
+error is not the scattering's.
 
 Writes DIR/budget.json, DIR/budget.md and DIR/errors.png (reference, ours
 + OIDN, |error| at quarter resolution on one scale, the blocks' causes:
@@ -141,8 +143,12 @@ def mean_curvature(pos, valid):
     return H
 
 
-def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x):
-    """The squared-error budget of ours against ref (see the module doc)."""
+def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x,
+           plain=None):
+    """The squared-error budget of ours against ref (see the module doc);
+    with plain (the render without SSS, denoised), each cause's RMSE of
+    that render in the same blocks too (rmse_plain): what the blocks'
+    error would be without scattering."""
     import compare_metrics as cm
     cover = down(mask.astype(np.float64)) >= cm.QUARTER_COVERAGE
     qo, qr = down(ours), down(ref)
@@ -180,6 +186,7 @@ def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x):
                                 blocks=float("nan"), rmse=float("nan"),
                                 gains=gains)}
     n_blocks = int(cover.sum())
+    perr = ((down(plain) - qr) ** 2).sum(-1) if plain is not None else None
     for i, name in enumerate(CAUSES):
         sel = cause == i
         se = float(err2[sel].sum() - noise[sel].sum())
@@ -187,6 +194,10 @@ def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x):
             share=se / total if total > 0 else float("nan"),
             blocks=float(sel.sum()) / max(n_blocks, 1),
             rmse=float(np.sqrt(max(se, 0.0) / max(3 * sel.sum(), 1))))
+        if perr is not None:
+            sp = float(perr[sel].sum() - noise[sel].sum())
+            rows[name]["rmse_plain"] = float(
+                np.sqrt(max(sp, 0.0) / max(3 * sel.sum(), 1)))
     rows["total"] = dict(share=1.0, blocks=1.0, rmse=float(np.sqrt(
         max(total, 0.0) / max(3 * n_blocks, 1))))
     return rows, cause, np.sqrt(np.maximum(err - noise, 0.0) / 3)
@@ -287,7 +298,7 @@ def run(args):
             radius[idx == f.pass_index] = max(f.radius)
         curv_x = orient(H, pos, scene) * radius
     rows_b, cause, qerr = budget(ours_dn, ref, halves, mask, idx, depth,
-                                 back_share, curv_x)
+                                 back_share, curv_x, plain_dn)
     result = dict(scene=args.name, resolution=list(args.resolution),
                   ref_samples=args.ref_samples, blender=blender_version(),
                   runs=rows, budget=rows_b)
@@ -373,8 +384,11 @@ def markdown(results):
             if k not in b:
                 cells.append("")
                 continue
+            plain = b[k].get("rmse_plain")
             cells.append(f"{100 * b[k]['share']:.0f} % ({100 * b[k]['blocks']:.0f} % "
-                         f"of blocks, {b[k]['rmse']:.3f})")
+                         f"of blocks, {b[k]['rmse']:.3f}" +
+                         (f"; no SSS {plain:.3f}" if plain is not None
+                          else "") + ")")
         out.append(f"| {r['scene']} | {b['total']['rmse']:.4f} | " +
                    " | ".join(cells) + " |")
     out += ["", "| scene | run | samples | seconds | quarter-res RMSE | "

@@ -80,3 +80,17 @@ def test_a_sharp_convex_edge_is_an_edge_not_a_crevice():
     rows, _ = split(ours, ref, idx, depth, mask, curv=curv)
     assert rows["edges"]["share"] > 0.95
     assert rows["crevices"]["share"] == 0.0
+
+
+def test_the_render_without_sss_is_measured_in_the_same_blocks():
+    ref, idx, depth, mask, flat = frame()
+    w = ref.shape[1]
+    ours = ref.copy()
+    ours[:, w // 2 - 1:w // 2 + 1] += 0.1
+    plain = ours.copy()
+    plain[:, :8] -= 0.2           # away from the silhouette
+    rows, _, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth, flat,
+                           flat, plain)
+    assert abs(rows["silhouettes"]["rmse_plain"] -
+               rows["silhouettes"]["rmse"]) < 0.02
+    assert rows["rest"]["rmse_plain"] > 0.05 > rows["rest"]["rmse"]
