@@ -385,7 +385,8 @@ def markdown(results):
                 cells.append("")
                 continue
             plain = b[k].get("rmse_plain")
-            cells.append(f"{100 * b[k]['share']:.0f} % ({100 * b[k]['blocks']:.0f} % "
+            cells.append(f"{100 * b[k]['share']:.0f} % "
+                         f"({100 * b[k]['blocks']:.0f} % "
                          f"of blocks, {b[k]['rmse']:.3f}" +
                          (f"; no SSS {plain:.3f}" if plain is not None
                           else "") + ")")
