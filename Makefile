@@ -58,7 +58,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps bpy farm-test test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures screenshots clean
+.PHONY: all deps bpy farm-test test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep error-budget figures screenshots clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -294,6 +294,35 @@ sweep: deps all $(filter $(BUILD)/%,$(SWEEP_BLENDER))
 	done
 	@$(PYTHON) scripts/sweep_summary.py out/compare/sweep \
 		--scenes $(shell echo $(SWEEP_SCENES) | tr ' ' ,)
+
+# Where our remaining error is, by cause (calibration, silhouettes,
+# transmission, crevices, the rest), on every bundled scene with OIDN on
+# both sides, and ours + OIDN against the denoised random walk at equal
+# time (blender_scripts/error_budget.py): out/error_budget/SCENE/
+# {budget.md,budget.json,errors.png} and out/error_budget/summary.md. The
+# reference renders (random walk, BUDGET_ARGS' --ref-samples, default
+# 1024) are kept in $(BUILD)/error_budget/ and reused.
+BUDGET_SCENES ?= head marble mixed block sphere
+BUDGET_ARGS ?=
+BUDGET_BLENDER ?= $(word 1,$(BPY_BLENDERS))
+error-budget: deps all $(filter $(BUILD)/%,$(BUDGET_BLENDER))
+	@mkdir -p out/error_budget $(BUILD)/error_budget
+	@for kind in $(BUDGET_SCENES); do \
+		log=$(BUILD)/error_budget/$$kind.log; \
+		$(BUDGET_BLENDER) -b --factory-startup --python-exit-code 1 \
+			--python blender_scripts/build_scene.py -- --kind $$kind \
+			--out $(BUILD)/error_budget/$$kind.blend >$$log 2>&1 && \
+		SSS_LIB=$(abspath $(BUILD))/libsss.so $(BUDGET_BLENDER) -b \
+			--factory-startup --python-exit-code 1 \
+			--python blender_scripts/error_budget.py -- \
+			--scene $(BUILD)/error_budget/$$kind.blend --name $$kind \
+			--out out/error_budget/$$kind \
+			--cache $(BUILD)/error_budget/cache $(BUDGET_ARGS) >>$$log 2>&1 \
+			|| { tail -n 40 $$log; exit 1; }; \
+		grep -E '^(budget|\|)' $$log; \
+	done
+	@$(BUDGET_BLENDER) -b --factory-startup --python-exit-code 1 \
+		--python blender_scripts/error_budget.py -- --summary out/error_budget
 
 # The README's picture: the head scene without SSS, with the library and
 # with Cycles' random walk (the reference), each with its time, from a

@@ -47,7 +47,10 @@ shape: a sphere of radius 4 cm (128 x 64 segments, smooth) seen head-on by
   mean curvature 1/a), and the box under the same sun: the random walk
   over SSS off in the middle 10 % of the frame (--size / 10 pixels square)
   of the sphere, divided by the box's, is what a convex surface adds to
-  the flat slab's gain (the shape table of csrc/sss_calibration.c).
+  the flat slab's gain (the shape table of csrc/sss_calibration.c); the
+  same over the sphere's whole visible side (gain_whole) is what the walk
+  returns there at all once its light spreads over the whole object
+  (--shape-x: which x).
   Written to DIR/shape_METHOD.csv.
 
 Everything is Cycles on the CPU with denoising and adaptive sampling off,
@@ -72,7 +75,7 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
 from separable_sss import native  # noqa: E402
-from exr_io import read_exr, rgb  # noqa: E402
+from exr_io import read_exr, rgb, single  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
 ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
@@ -109,9 +112,12 @@ def parse_args():
     p.add_argument("--view", type=float, default=0.2,
                    help="metres of the face the camera sees")
     p.add_argument("--albedos", help="override: a,b,c;d,e,f")
+    p.add_argument("--shape-x", default=",".join(f"{x:g}" for x in SHAPE_X),
+                   help="shape: the radii over the sphere's radius")
     args = p.parse_args(argv)
     args.part = args.part.split(",")
     args.radii = [float(x) for x in args.radii.split(",")]
+    args.shape_x = [float(x) for x in args.shape_x.split(",")]
     try:
         args.view_angles = [float(x) for x in args.view_angles.split(",")]
     except ValueError as e:
@@ -606,17 +612,22 @@ def sphere(scene, radius):
 
 
 def middle_ratio(scene, mat, albedo, radius, args, tag):
-    """Random walk over SSS off, per channel, in the middle of the frame."""
+    """Random walk over SSS off, per channel: in the middle of the frame,
+    and over every pixel of the object (its whole visible side)."""
     n = args.size
     k = max(2, n // 10)
     win = (slice((n - k) // 2, (n + k) // 2),) * 2
-    means = {}
+    means, whole = {}, {}
     for label, sub in (("off", 0.0), ("rw", 1.0)):
         set_material(mat, albedo, radius, sub, args.method)
         path = os.path.join(args.out, "work", f"shape_{tag}_{label}.exr")
         ch, _ = render_to(scene, path, 1 if label == "off" else 2)
-        means[label] = rgb(ch, "Combined")[win].reshape(-1, 3).mean(axis=0)
-    return means["rw"] / np.maximum(means["off"], 1e-12)
+        img = rgb(ch, "Combined")
+        means[label] = img[win].reshape(-1, 3).mean(axis=0)
+        seen = single(ch, "Depth") < 1e9
+        whole[label] = img[seen].mean(axis=0)
+    return (means["rw"] / np.maximum(means["off"], 1e-12),
+            whole["rw"] / np.maximum(whole["off"], 1e-12))
 
 
 def part_shape(args):
@@ -629,23 +640,26 @@ def part_shape(args):
         world(scene, 0.0)
         sun(scene, (0.0, 1.0, 0.0))
         setup_render(scene, args, None)
-        flat = middle_ratio(scene, mat, albedo, 0.05, args, "slab")
+        flat = middle_ratio(scene, mat, albedo, 0.05, args, "slab")[0]
         VIEW = 3.0 * SHAPE_RADIUS
-        for x in SHAPE_X:
+        for x in args.shape_x:
             scene = reset()
             _, mat = sphere(scene, SHAPE_RADIUS)
             world(scene, 0.0)
             sun(scene, (0.0, 1.0, 0.0))
             setup_render(scene, args, None)
-            ratio = middle_ratio(scene, mat, albedo, x * SHAPE_RADIUS, args,
-                                 f"{x:g}")
+            ratio, whole = middle_ratio(scene, mat, albedo,
+                                        x * SHAPE_RADIUS, args, f"{x:g}")
             for c in range(3):
                 rows.append(dict(method=args.method, x=x, albedo=albedo[c],
                                  sphere=float(ratio[c]), slab=float(flat[c]),
-                                 gain=float(ratio[c] / flat[c])))
+                                 gain=float(ratio[c] / flat[c]),
+                                 sphere_whole=float(whole[c]),
+                                 gain_whole=float(whole[c] / flat[c])))
                 log(f"shape x={x:g} A={albedo[c]:.3f}: sphere "
                     f"{ratio[c]:.4f} slab {flat[c]:.4f} gain "
-                    f"{ratio[c] / flat[c]:.4f}")
+                    f"{ratio[c] / flat[c]:.4f}; over its visible side "
+                    f"{whole[c]:.4f}, gain {whole[c] / flat[c]:.4f}")
     write_csv(os.path.join(args.out, f"shape_{args.method.lower()}.csv"),
               rows)
 

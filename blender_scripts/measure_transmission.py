@@ -58,6 +58,9 @@ def parse_args():
     p.add_argument("--slab-subsurface", default="0.02,0.05",
                    help="slab mode: the Subsurface values (radius factors) "
                    "to sweep")
+    p.add_argument("--slab-albedo", default="",
+                   help="slab mode: the skin's colour (Base and Subsurface "
+                   "Color) as R,G,B instead of the scene's")
     p.add_argument("--model", default="BURLEY",
                    help="transmission model for materials that have it off "
                    "(the add-on's default): BURLEY, JIMENEZ, BEER_LAMBERT, "
@@ -126,6 +129,12 @@ def slab_sweep(args):
                 mat = bpy.data.materials["Skin"]
                 bsdf = mat.node_tree.nodes["Principled BSDF"]
                 compat.set_subsurface_factor(bsdf, sub)
+                if args.slab_albedo:
+                    colour = (*[float(v) for v in
+                                args.slab_albedo.split(",")], 1.0)
+                    compat.set_principled(bsdf, base=colour,
+                                          subsurface_color=colour,
+                                          subsurface=sub)
                 bpy.context.view_layer.update()
                 path = os.path.join(work, f"{tag}_{kind}.exr")
                 if kind == "rw":

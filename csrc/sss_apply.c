@@ -159,6 +159,9 @@ typedef struct rows_ctx {
 	                       of each CURVATURE_BLOCK^2 block, NaN where not
 	                       read (or NULL: no material follows the shape) */
 	int16_t *slot;
+	const float *median_x; /* per material, the median over its pixels
+	                          of the widest walk radius x the mean
+	                          curvature (sss_auto.c), or NULL */
 	const float *crease; /* what sharp edges carried (sss_crease.c), 3 a
 	                        pixel in the signal's units, or NULL */
 	const sss_image *out_combined, *out_diffuse_light;
@@ -282,7 +285,7 @@ static void add_crease(const rows_ctx *ctx, size_t i, float mu,
 		}
 	}
 	sss__calibration_apply(&ctx->materials[k], ctx->kernels[k].calibration_fade,
-	                       mu, NULL, col, extra);
+	                       mu, NULL, NULL, col, extra);
 	for (int c = 0; c < 3; c++)
 		light[c] += extra[c];
 }
@@ -331,11 +334,18 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				           : 1.0f;
 				/* and at the surface's curvature over the distance
 				   the walk travels */
-				float shape[3];
+				float shape[3], far[3];
 				int shaped = ctx->curvature &&
 				             shape_follows(ctx, slot[i]);
+				int whole = 0;
 				if (shaped) {
 					const float *r = kernels[slot[i]].walk_radius;
+					float rmax = fmaxf(r[0], fmaxf(r[1], r[2]));
+					float mx = ctx->median_x ? ctx->median_x[slot[i]]
+					                         : NAN;
+					whole = isfinite(mx) && rmax > 0.0f;
+					for (int c = 0; c < 3 && whole; c++)
+						far[c] = mx * r[c] / rmax;
 					int32_t b = CURVATURE_BLOCK;
 					size_t first = (size_t)(y - y % b) * w + (x - x % b);
 					float H = slot[first] == slot[i]
@@ -348,7 +358,7 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 						shape[c] = H * r[c];
 				}
 				sss__calibration_apply(m, fade, mu, shaped ? shape : NULL,
-				                       col, light);
+				                       whole ? far : NULL, col, light);
 				if (ctx->crease)
 					add_crease(ctx, i, mu, col, light);
 			}
@@ -584,6 +594,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	float *own_scratch = NULL;
 	float *curvature = NULL; /* allocated below, once kernels tell */
 	float *crease = NULL;    /* likewise */
+	float *median_x = NULL;  /* likewise */
 	if (!scratch)
 		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
@@ -699,9 +710,25 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	}
 
 	rc.crease = crease;
-	if (curvature)
+	if (curvature) {
 		sss__parallel_rows((h + CURVATURE_BLOCK - 1) / CURVATURE_BLOCK,
 		                   opt.num_threads, curvature_rows, &rc);
+		/* The objects' scale against the radius, for the far term: the
+		 * median x auto reads (its choice is not used here). */
+		median_x = malloc(material_count * sizeof *median_x);
+		int32_t *unused = malloc(material_count * sizeof *unused);
+		r = median_x && unused
+		    ? sss__auto_methods(&p->depth, slot, &job.proj, w, h, kernels,
+		                        material_count, unused, median_x)
+		    : SSS_ERR_OUT_OF_MEMORY;
+		free(unused);
+		if (r) {
+			FAILX(r, "cannot allocate working memory for a %dx%d image",
+			      w, h);
+			goto done;
+		}
+		rc.median_x = median_x;
+	}
 	sss__parallel_rows(h, opt.num_threads, composite_rows, &rc);
 	if (chosen)
 		for (int32_t m = 0; m < material_count; m++)
@@ -716,6 +743,7 @@ done:
 	free(signal);
 	free(curvature);
 	free(crease);
+	free(median_x);
 	free(own_scratch);
 	free(zrange);
 	free(method_of);

@@ -484,6 +484,96 @@ static const float shape_gain[][SHAPE_N][CAL_N] = {
 	},
 };
 
+/* 5b. Far. Once the radius is many times the object's curvature radius
+ *    the walk's light spreads over the whole object and leaves it
+ *    evenly, by faces the camera does not see as much as by those it
+ *    does: the visible side returns what enters the object at all,
+ *    less the far side's share and what is absorbed, whatever its
+ *    shading (the 3.4 walk on the 8 cm sphere at 5 m was 0.56 of the
+ *    diffuse render in red where ours, lit side kept, was 1.04). The
+ *    same sphere runs as section 5, over every pixel of its visible side
+ *    instead of the middle (calibrate.py --part shape, gain_whole: the
+ *    walk over SSS off there, over the flat slab's), at x = 10, 30,
+ *    100 and 300; beyond, as 300. It is applied per material at the
+ *    median x over its pixels (sss_auto.c: the object's scale, not an
+ *    edge's), rising from none at x = 10 to all of it at x = 30 (log x),
+ *    in place of the per-pixel shape term. */
+static const float far_x[] = {10.0f, 30.0f, 100.0f, 300.0f};
+#define FAR_N ((int)(sizeof far_x / sizeof *far_x))
+static const float far_gain[][FAR_N][CAL_N] = {
+	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
+		/* x = 10 */
+		{7.1778f, 7.1778f, 3.6446f, 1.8703f, 1.3133f, 1.0571f, 0.9135f, 0.8476f,
+		 0.8047f, 0.8055f, 0.8411f, 0.9047f, 0.8959f, 0.8968f, 0.8972f, 1.0260f},
+		/* x = 30 */
+		{7.3734f, 7.3734f, 3.7009f, 1.8494f, 1.2575f, 0.9763f, 0.8116f, 0.7201f,
+		 0.6562f, 0.6323f, 0.6557f, 0.7185f, 0.7106f, 0.7131f, 0.7134f, 1.0318f},
+		/* x = 100 */
+		{7.4453f, 7.4453f, 3.7219f, 1.8416f, 1.2347f, 0.9430f, 0.7680f, 0.6644f,
+		 0.5857f, 0.5345f, 0.5277f, 0.5529f, 0.5469f, 0.5479f, 0.5483f, 0.9435f},
+		/* x = 300 */
+		{7.4659f, 7.4659f, 3.7273f, 1.8385f, 1.2284f, 0.9335f, 0.7556f, 0.6469f,
+		 0.5629f, 0.5004f, 0.4808f, 0.4811f, 0.4760f, 0.4764f, 0.4768f, 0.7771f},
+	},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
+		/* x = 10 */
+		{4.2049f, 4.2049f, 2.1483f, 1.1460f, 0.8339f, 0.7032f, 0.6445f, 0.6194f,
+		 0.6157f, 0.6799f, 0.7337f, 0.8252f, 0.8145f, 0.8142f, 0.8142f, 1.0318f},
+		/* x = 30 */
+		{4.2737f, 4.2737f, 2.1276f, 1.0714f, 0.7292f, 0.5732f, 0.4901f, 0.4412f,
+		 0.4161f, 0.4450f, 0.4872f, 0.5793f, 0.5708f, 0.5715f, 0.5715f, 1.0277f},
+		/* x = 100 */
+		{4.2922f, 4.2922f, 2.1150f, 1.0390f, 0.6892f, 0.5222f, 0.4273f, 0.3635f,
+		 0.3208f, 0.3116f, 0.3203f, 0.3642f, 0.3586f, 0.3597f, 0.3597f, 0.8959f},
+		/* x = 300 */
+		{4.2997f, 4.2997f, 2.1123f, 1.0299f, 0.6758f, 0.5056f, 0.4069f, 0.3396f,
+		 0.2907f, 0.2663f, 0.2574f, 0.2684f, 0.2642f, 0.2649f, 0.2649f, 0.6659f},
+	},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
+		/* x = 10 */
+		{1.2497f, 1.2497f, 1.1883f, 1.0634f, 0.9349f, 0.8309f, 0.7337f, 0.6428f,
+		 0.5649f, 0.4946f, 0.4657f, 0.4413f, 0.4343f, 0.4343f, 0.4343f, 0.4343f},
+		/* x = 30 */
+		{0.7872f, 0.7872f, 0.7146f, 0.5899f, 0.4875f, 0.4128f, 0.3519f, 0.3007f,
+		 0.2599f, 0.2253f, 0.2113f, 0.1999f, 0.1966f, 0.1966f, 0.1966f, 0.1966f},
+		/* x = 100 */
+		{0.3162f, 0.3162f, 0.2789f, 0.2204f, 0.1762f, 0.1462f, 0.1230f, 0.1041f,
+		 0.0895f, 0.0773f, 0.0725f, 0.0685f, 0.0674f, 0.0674f, 0.0674f, 0.0674f},
+		/* x = 300 */
+		{0.1165f, 0.1165f, 0.1018f, 0.0794f, 0.0628f, 0.0518f, 0.0434f, 0.0366f,
+		 0.0314f, 0.0271f, 0.0254f, 0.0240f, 0.0236f, 0.0236f, 0.0236f, 0.0236f},
+	},
+};
+
+float sss__far_gain(int32_t calibration, float albedo, float x,
+                    float *weight)
+{
+	*weight = 0.0f;
+	if (!is_calibration(calibration) || !(x > far_x[0]) ||
+	    !isfinite(albedo))
+		return 1.0f;
+	*weight = x >= 3.0f * far_x[0] ? 1.0f
+	          : logf(x / far_x[0]) / logf(3.0f);
+	int j = 1;
+	float tx = 1.0f;
+	if (x >= far_x[FAR_N - 1]) {
+		j = FAR_N - 1;
+	} else {
+		while (far_x[j] < x)
+			j++;
+		tx = logf(x / far_x[j - 1]) / logf(far_x[j] / far_x[j - 1]);
+	}
+	float a = albedo <= cal_albedo[1] ? cal_albedo[1]
+	          : albedo >= 1.0f ? 1.0f : albedo;
+	float ta = 0.0f;
+	int i = a <= cal_albedo[1] ? 2 : interval(a, 2, &ta);
+	const float *r0 = far_gain[calibration][j - 1];
+	const float *r1 = far_gain[calibration][j];
+	float g0 = r0[i - 1] + ta * (r0[i] - r0[i - 1]);
+	float g1 = r1[i - 1] + ta * (r1[i] - r1[i - 1]);
+	return g0 + tx * (g1 - g0);
+}
+
 static int has_shape(int32_t calibration)
 {
 	return is_calibration(calibration);
@@ -526,7 +616,8 @@ float sss__shape_gain(int32_t calibration, float albedo, float x)
 
 void sss__calibration_apply(const sss_material *mat, const float fade[3],
                             float view_cosine, const float *shape,
-                            const float *diff_col, float *light)
+                            const float *far, const float *diff_col,
+                            float *light)
 {
 	if (!is_calibration(mat->calibration))
 		return;
@@ -553,8 +644,13 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
 			 * it is not applied. */
 			float sg = sss__shape_gain(mat->calibration, diff_col[c],
 			                           shape[c]);
-			if (sg > 1.0f)
-				g *= 1.0f + view_cosine * (sg - 1.0f);
+			float local = sg > 1.0f ? 1.0f + view_cosine * (sg - 1.0f)
+			                        : 1.0f;
+			float w = 0.0f;
+			float whole = far ? sss__far_gain(mat->calibration,
+			                                  diff_col[c], far[c], &w)
+			                  : 1.0f;
+			g *= (1.0f - w) * local + w * whole;
 		}
 		light[c] *= 1.0f + m * (g - 1.0f);
 	}

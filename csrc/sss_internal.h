@@ -147,11 +147,19 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
                        const sss_image *diff_col, const uint8_t *enabled,
                        const int32_t *calibration, int32_t num_threads,
                        float *extra);
+/* What the walk returns over the whole visible side of an object whose
+ * median x (mean curvature x radius) is x, over the flat slab's; *weight
+ * (0 up to x = 10, 1 from 30) is how much of it stands in place of the
+ * per-pixel shape term. */
+float sss__far_gain(int32_t calibration, float albedo, float x,
+                    float *weight);
 /* shape_x: per channel, the surface's mean curvature x the radius the
- * walk sees (NULL: flat, or not followed). */
+ * walk sees (NULL: flat, or not followed); far_x: per channel, the
+ * material's median of the same over its pixels (NULL: not read). */
 void sss__calibration_apply(const sss_material *mat, const float fade[3],
                             float view_cosine, const float *shape_x,
-                            const float *diff_col, float *light);
+                            const float *far_x, const float *diff_col,
+                            float *light);
 
 /* The mean curvature (1 / scene units, positive where convex) of the
  * visible surface at pixel (x, y), averaged over about rho scene units

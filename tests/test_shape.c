@@ -275,13 +275,13 @@ static sss_material skin_walk(float r, const float a3[3])
 
 /* sss_apply on the sphere: the blur keeps the even light, so the middle
  * pixel (seen head-on) is the light times g(A, 1) times the shape gain at
- * x = radius. */
+ * x = radius (up to x = 10, where the far term, test_far, starts). */
 static void test_apply(void)
 {
 	const float a3[3] = {0.2f, 0.5f, 0.8f};
 	sphere_frame f;
 	sphere_frame_make(&f, a3);
-	const float radii[] = {0.03f, 0.3f, 1.0f, 30.0f};
+	const float radii[] = {0.03f, 0.3f, 1.0f, 8.0f};
 	for (int k = 0; k < 4; k++) {
 		sss_material m = skin_walk(radii[k], a3);
 		sss_image ol = {f.out, N, N, 3, 0};
@@ -336,9 +336,9 @@ static void test_rise_and_fall(void)
 	float g[3];
 	sss_calibration_gain(m.calibration, col, mu, g);
 	float up[3] = {1, 1, 1}, down[3] = {1, 1, 1}, flat[3] = {1, 1, 1};
-	sss__calibration_apply(&m, fade, mu, rise, col, up);
-	sss__calibration_apply(&m, fade, mu, fall, col, down);
-	sss__calibration_apply(&m, fade, mu, NULL, col, flat);
+	sss__calibration_apply(&m, fade, mu, rise, NULL, col, up);
+	sss__calibration_apply(&m, fade, mu, fall, NULL, col, down);
+	sss__calibration_apply(&m, fade, mu, NULL, NULL, col, flat);
 	for (int c = 0; c < 3; c++) {
 		float sr = sss__shape_gain(m.calibration, col[c], 1.0f);
 		float sf = sss__shape_gain(m.calibration, col[c], 100.0f);
@@ -537,12 +537,63 @@ static void test_auto(void)
 	sphere_frame_free(&f);
 }
 
+/* A radius 40 and 100 times the sphere's, lit evenly from the front:
+ * the walk's light spreads over the whole object and as much leaves by
+ * the far side, so the visible side returns far less than the diffuse
+ * render (8 cm sphere at 5 m in Blender 4.5: 0.35 / 0.49 / 0.62 of it;
+ * ours kept the lit side's light and was 1.04, brighter than the diffuse
+ * render). Over the sphere the mean is now the light times g(A, 1) times
+ * the walk's whole-side gain at the median x, within the view gain's
+ * spread; before, it was at least the light times g. */
+static void test_far(void)
+{
+	const float a3[3] = {0.3f, 0.5f, 0.8f};
+	sphere_frame f;
+	sphere_frame_make(&f, a3);
+	const float radii[] = {40.0f, 100.0f};
+	int32_t chosen[1];
+	for (int k = 0; k < 2; k++) {
+		sss_material m = skin_walk(radii[k], a3);
+		CHECK_STATUS("far-status", SSS_OK,
+		             run_method(&f, &m, 1, SSS_METHOD_AUTO, f.out, chosen));
+		float x = NAN;
+		int32_t unused;
+		CHECK_STATUS("far-median", SSS_OK,
+		             sss__auto_methods(&f.ps.depth, f.slot, &f.proj, N, N,
+		                               &(sss__kernel){.walk_radius =
+		                                   {radii[k], radii[k], radii[k]}},
+		                               1, &unused, &x));
+		double sum[3] = {0, 0, 0};
+		int n = 0;
+		for (int i = 0; i < N * N; i++)
+			if (f.slot[i] >= 0) {
+				for (int c = 0; c < 3; c++)
+					sum[c] += f.out[3 * i + c];
+				n++;
+			}
+		float g[3];
+		sss_calibration_gain(m.calibration, a3, 1.0f, g);
+		for (int c = 0; c < 3; c++) {
+			float w;
+			double whole = sss__far_gain(m.calibration, a3[c], x, &w);
+			double got = sum[c] / n / 2.0;
+			CHECK("far-mean", w == 1.0f && whole < 0.75 &&
+			      fabs(got / (g[c] * whole) - 1.0) < 0.1,
+			      "radius %g (median x %g) channel %d: mean %g of the "
+			      "light, expected %g", (double)radii[k], (double)x, c,
+			      got, g[c] * whole);
+		}
+	}
+	sphere_frame_free(&f);
+}
+
 int main(void)
 {
 	test_curvature();
 	test_table();
 	test_apply();
 	test_rise_and_fall();
+	test_far();
 	test_backlit();
 	test_auto();
 	return tu_finish("test_shape");

@@ -1,0 +1,430 @@
+"""Where our remaining error is, by cause, with OIDN on both sides, and the
+trade at equal time against the denoised random walk, headless:
+
+    blender -b --factory-startup --python-exit-code 1 \\
+        --python blender_scripts/error_budget.py -- --scene SCENE.blend \\
+        --out DIR [--name NAME] [--resolution 240x135] [--ref-samples 1024]
+        [--rw-samples 4,8,16,64] [--samples 16] [--cache DIR]
+    blender -b --python blender_scripts/error_budget.py -- --summary DIR
+
+In one run: Cycles' random walk at --ref-samples (the reference: two
+renders of half as many samples with two other seeds, so that its noise can
+be taken out; kept in --cache and reused by later runs of the same scene,
+size and count), the random walk at each --rw-samples count, the render
+with material SSS off at --samples and our default method on its passes;
+every one of them but the reference denoised by Blender's Denoise node
+(OIDN, with the render's albedo and normal), as artists render. Times are
+wall times of the render, the library's scatter and the denoise.
+
+The budget is of ours + OIDN at quarter resolution (compare_metrics: 4 x 4
+blocks at least 75 % scattering, where noise averages away and bias
+stays), its squared error against the reference with the reference's own
+noise taken out:
+- calibration: what a per-material, per-channel gain fitted to the
+  reference takes away (the energy the walk returns that ours does not);
+  the shares below split what is left after that gain, by block, the
+  first that applies:
+- silhouettes: blocks touching a silhouette or a depth step (a pixel with
+  a 4-neighbour of another material or a depth more than 5 % apart),
+  where light leaves or enters through faces the camera does not see;
+- transmission: blocks where the back-light layer's light is at least
+  5 % of the front diffuse light (its scattering pixels);
+- crevices: blocks whose surface is concave at the scale of the
+  material's radius (the mean curvature from the Position pass times the
+  largest radius below -0.05: grooves, sockets, the inside of a ring);
+- edges: blocks with a sharp convex edge between faces the camera sees
+  (that curvature times the radius above 2: far sharper than any
+  rounded object at its own scale);
+- the rest.
+Each line: its share of the squared error (with the reference's noise in
+those blocks taken out; shares may be negative where that noise is larger
+than the error), the share of blocks, the RMSE there and the render
+without SSS's (denoised) in the same blocks: where the two are alike the
+error is not the scattering's.
+
+Writes DIR/budget.json, DIR/budget.md and DIR/errors.png (reference, ours
++ OIDN, |error| at quarter resolution on one scale, the blocks' causes:
+red silhouettes, blue transmission, green crevices, yellow edges, grey
+the rest). With
+--summary, DIR/summary.md gathers every DIR/*/budget.json.
+"""
+import argparse
+import glob
+import json
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import numpy as np  # noqa: E402
+
+from script_cli import run_main, script_argv  # noqa: E402
+
+CAUSES = ("silhouettes", "transmission", "crevices", "edges", "rest")
+TRANSMISSION_SHARE = 0.05
+CONCAVE_X = -0.05
+CONVEX_EDGE_X = 2.0
+
+
+def log(*a):
+    print("budget:", *a, flush=True)
+
+
+def parse_args():
+    p = argparse.ArgumentParser(prog="error_budget.py")
+    p.add_argument("--scene")
+    p.add_argument("--out", help="the scene's output folder")
+    p.add_argument("--name")
+    p.add_argument("--resolution", default="240x135")
+    p.add_argument("--ref-samples", type=int, default=1024)
+    p.add_argument("--rw-samples", default="4,8,16,64")
+    p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--cache", help="where the reference renders are kept "
+                   "(default: DIR/../cache)")
+    p.add_argument("--summary", help="gather DIR/*/budget.json into "
+                   "DIR/summary.md and stop")
+    args = p.parse_args(script_argv())
+    if args.summary:
+        return args
+    if not args.scene or not args.out:
+        p.error("--scene and --out are required (or --summary)")
+    try:
+        w, _, h = args.resolution.partition("x")
+        args.resolution = (int(w), int(h))
+        args.rw_samples = sorted({int(x) for x in args.rw_samples.split(",")})
+    except ValueError as e:
+        p.error(f"--resolution or --rw-samples: {e}")
+    args.scene = os.path.abspath(args.scene)
+    args.out = os.path.abspath(args.out)
+    args.name = args.name or os.path.splitext(os.path.basename(
+        args.scene))[0]
+    args.cache = os.path.abspath(args.cache or os.path.join(
+        os.path.dirname(args.out), "cache"))
+    args.eevee_samples = 1   # compare_runs.open_scene reads it
+    return args
+
+
+# ------------------------------------------------------------- measures
+
+def down(a, f=4):
+    """4 x 4 block means (compare_metrics.downsample), any trailing axes."""
+    import compare_metrics as cm
+    return cm.downsample(a, f)
+
+
+def mean_curvature(pos, valid):
+    """Mean curvature (1 / scene units, positive where convex seen from the
+    camera's side) per pixel from the Position pass: the normals of the
+    surface the pixels span (cross product of the position's differences)
+    and their divergence along the surface. NaN where a neighbour is not
+    valid."""
+    p = pos.astype(np.float64)
+    dx = np.zeros_like(p)
+    dy = np.zeros_like(p)
+    dx[:, 1:-1] = (p[:, 2:] - p[:, :-2]) / 2
+    dy[1:-1] = (p[2:] - p[:-2]) / 2
+    n = np.cross(dx, dy)
+    ln = np.linalg.norm(n, axis=-1, keepdims=True)
+    n = np.where(ln > 0, n / np.maximum(ln, 1e-30), np.nan)
+    ndx = np.full_like(n, np.nan)
+    ndy = np.full_like(n, np.nan)
+    ndx[:, 1:-1] = (n[:, 2:] - n[:, :-2]) / 2
+    ndy[1:-1] = (n[2:] - n[:-2]) / 2
+    kx = np.sum(ndx * dx, -1) / np.maximum(np.sum(dx * dx, -1), 1e-30)
+    ky = np.sum(ndy * dy, -1) / np.maximum(np.sum(dy * dy, -1), 1e-30)
+    H = 0.5 * (kx + ky)
+    ok = valid.copy()
+    for axis in (0, 1):
+        for s in (1, -1, 2, -2):
+            ok &= np.roll(valid, s, axis)
+    H[~ok] = np.nan
+    return H
+
+
+def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x,
+           plain=None):
+    """The squared-error budget of ours against ref (see the module doc);
+    with plain (the render without SSS, denoised), each cause's RMSE of
+    that render in the same blocks too (rmse_plain): what the blocks'
+    error would be without scattering."""
+    import compare_metrics as cm
+    cover = down(mask.astype(np.float64)) >= cm.QUARTER_COVERAGE
+    qo, qr = down(ours), down(ref)
+    qa, qb = down(halves[0]), down(halves[1])
+    noise = ((qa - qb) ** 2 / 4).sum(-1)          # per block, over RGB
+    # the block's material: the most common scattering index in it
+    h4, w4 = qo.shape[:2]
+    ids = np.rint(idx[:h4 * 4, :w4 * 4]).reshape(h4, 4, w4, 4)
+    ids = ids.transpose(0, 2, 1, 3).reshape(h4, w4, 16)
+    block_id = np.array([[np.bincount(b.astype(np.int64)).argmax()
+                          for b in row] for row in ids])
+    err = ((qo - qr) ** 2).sum(-1)
+    total = float(err[cover].sum() - noise[cover].sum())
+    gains = {}
+    fitted = qo.copy()
+    for m in np.unique(block_id[cover]):
+        sel = cover & (block_id == m)
+        k = (qo[sel] * qr[sel]).sum(0) / np.maximum((qo[sel] ** 2).sum(0),
+                                                     1e-30)
+        gains[int(m)] = [float(v) for v in k]
+        fitted[sel] = qo[sel] * k
+    err2 = ((fitted - qr) ** 2).sum(-1)
+    cal = float(err[cover].sum() - err2[cover].sum())
+    edges = cm.silhouettes(idx, depth)
+    qe = down(edges.astype(np.float64)) > 0
+    qt = down(np.nan_to_num(back_share) * mask) >= TRANSMISSION_SHARE
+    cx = np.where(np.isfinite(curv_x), curv_x, 0.0) * mask
+    qc = down(cx) < CONCAVE_X
+    qv = down((cx > CONVEX_EDGE_X).astype(np.float64)) > 0
+    cause = np.full(qo.shape[:2], len(CAUSES) - 1)
+    for i, sel in reversed(list(enumerate((qe, qt, qc, qv)))):
+        cause[sel] = i
+    cause[~cover] = -1
+    rows = {"calibration": dict(share=cal / total if total > 0 else np.nan,
+                                blocks=float("nan"), rmse=float("nan"),
+                                gains=gains)}
+    n_blocks = int(cover.sum())
+    perr = ((down(plain) - qr) ** 2).sum(-1) if plain is not None else None
+    for i, name in enumerate(CAUSES):
+        sel = cause == i
+        se = float(err2[sel].sum() - noise[sel].sum())
+        rows[name] = dict(
+            share=se / total if total > 0 else float("nan"),
+            blocks=float(sel.sum()) / max(n_blocks, 1),
+            rmse=float(np.sqrt(max(se, 0.0) / max(3 * sel.sum(), 1))))
+        if perr is not None:
+            sp = float(perr[sel].sum() - noise[sel].sum())
+            rows[name]["rmse_plain"] = float(
+                np.sqrt(max(sp, 0.0) / max(3 * sel.sum(), 1)))
+    rows["total"] = dict(share=1.0, blocks=1.0, rmse=float(np.sqrt(
+        max(total, 0.0) / max(3 * n_blocks, 1))))
+    return rows, cause, np.sqrt(np.maximum(err - noise, 0.0) / 3)
+
+
+# ------------------------------------------------------------- the run
+
+def reference(args, scene):
+    import compare_runs as compare
+    from exr_io import read_exr, rgb
+    os.makedirs(args.cache, exist_ok=True)
+    stem = os.path.join(args.cache, f"{args.name}_{args.resolution[0]}x"
+                        f"{args.resolution[1]}_rw{args.ref_samples}")
+    paths = [f"{stem}_{k}.exr" for k in (1, 2)]
+    if all(os.path.exists(p) for p in paths):
+        log(f"reference from {stem}_[12].exr")
+        return tuple(rgb(read_exr(p), "Combined").astype(np.float32)
+                     for p in paths)
+    t0 = time.perf_counter()
+    halves, _ = compare.render_reference(scene, args.ref_samples, stem)
+    log(f"reference rendered in {time.perf_counter() - t0:.0f} s")
+    return halves
+
+
+def run(args):
+    import compare_runs as compare
+    from separable_sss import native, pipeline
+    from exr_io import read_exr, rgb
+    os.makedirs(args.out, exist_ok=True)
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    scene = compare.open_scene(args, "CYCLES")
+    found = pipeline.analyse(scene)
+    if not found.found:
+        raise RuntimeError("nothing scatters in this scene")
+    halves = reference(args, scene)
+    ref = (halves[0] + halves[1]) / 2
+    layer = bpy_layer_name()
+
+    # Ours: SSS off, our default method (its SSS layer denoised below).
+    scene = compare.open_scene(args, "CYCLES")
+    found = pipeline.analyse(scene)
+    scene.cycles.samples = args.samples
+    inp = os.path.join(work, f"off_{args.samples}_passes.exr")
+    desc = os.path.join(work, f"off_{args.samples}_scene.json")
+    out = os.path.join(work, f"off_{args.samples}_sss.exr")
+    t0 = time.perf_counter()
+    compare.render_sss_off(scene, found, inp, desc)
+    render_s = time.perf_counter() - t0
+    ch = read_exr(inp)
+    mask, idx, depth = compare.scattering_pixels(ch, found)
+    t0 = time.perf_counter()
+    with native.Scene(desc) as sc:
+        sc.process(inp, out)
+    post_s = time.perf_counter() - t0
+    ours_raw = rgb(read_exr(out), "SSS.Combined")
+    # The random walk at each count.
+    walks = []
+    for n in args.rw_samples:
+        scene.cycles.samples = n
+        path = os.path.join(work, f"rw_{n}.exr")
+        t0 = time.perf_counter()
+        compare.render(scene)
+        walks.append((n, path, time.perf_counter() - t0))
+        pipeline.save_passes(scene, path)
+    # OIDN on each, after every render (the denoiser opens the scene).
+    denoiser = compare.Denoiser(args)
+    plain_dn, plain_dn_s = denoiser(inp, layer, "Combined")
+    ours_dn, ours_dn_s = denoiser(out, "SSS", "Combined")
+    rows = [dict(what="no SSS + OIDN", samples=args.samples,
+                 seconds=render_s + plain_dn_s,
+                 **metrics(plain_dn, ref, mask, halves)),
+            dict(what="ours", samples=args.samples, seconds=render_s + post_s,
+                 **metrics(ours_raw, ref, mask, halves)),
+            dict(what="ours + OIDN", samples=args.samples,
+                 seconds=render_s + post_s + ours_dn_s,
+                 **metrics(ours_dn, ref, mask, halves))]
+    for n, path, seconds in walks:
+        img, dn_s = denoiser(path, layer, "Combined")
+        rows.append(dict(what="walk + OIDN", samples=n,
+                         seconds=seconds + dn_s,
+                         **metrics(img, ref, mask, halves)))
+    scene = compare.open_scene(args, "CYCLES")
+
+    # The budget of ours + OIDN.
+    front = rgb(ch, "DiffDir") + rgb(ch, "DiffInd")
+    back_share = np.zeros(mask.shape)
+    if "SSSBackLight.DiffDir.R" in ch:
+        back = rgb(ch, "SSSBackLight.DiffDir") + \
+            rgb(ch, "SSSBackLight.DiffInd")
+        back_share = back.sum(-1) / np.maximum(front.sum(-1), 1e-6)
+    curv_x = np.full(mask.shape, np.nan)
+    if f"{layer}.Position.X" in ch:
+        pos = np.stack([ch[f"{layer}.Position.{c}"] for c in "XYZ"], -1)
+        H = mean_curvature(pos, mask)
+        radius = np.zeros(mask.shape)
+        for f in found.found:
+            radius[idx == f.pass_index] = max(f.radius)
+        curv_x = orient(H, pos, scene) * radius
+    rows_b, cause, qerr = budget(ours_dn, ref, halves, mask, idx, depth,
+                                 back_share, curv_x, plain_dn)
+    result = dict(scene=args.name, resolution=list(args.resolution),
+                  ref_samples=args.ref_samples, blender=blender_version(),
+                  runs=rows, budget=rows_b)
+    with open(os.path.join(args.out, "budget.json"), "w") as f:
+        json.dump(result, f, indent=1)
+    with open(os.path.join(args.out, "budget.md"), "w") as f:
+        f.write(markdown([result]))
+    picture(os.path.join(args.out, "errors.png"), ref, ours_dn, qerr, cause,
+            mask)
+    log(markdown([result]))
+
+
+def bpy_layer_name():
+    import bpy
+    return bpy.context.view_layer.name
+
+
+def blender_version():
+    import bpy
+    return bpy.app.version_string
+
+
+def orient(H, pos, scene):
+    """H signed so that a surface bulging towards the camera reads
+    positive: the cross product's normal is compared with the direction
+    to the camera at each pixel."""
+    cam = np.array(scene.camera.matrix_world.translation)
+    p = pos.astype(np.float64)
+    dx = np.zeros_like(p)
+    dy = np.zeros_like(p)
+    dx[:, 1:-1] = (p[:, 2:] - p[:, :-2]) / 2
+    dy[1:-1] = (p[2:] - p[:-2]) / 2
+    n = np.cross(dx, dy)
+    if scene.camera.data.type == "ORTHO":
+        to_cam = -np.array(scene.camera.matrix_world.to_3x3() @
+                           __import__("mathutils").Vector((0, 0, -1)))
+        facing = np.sum(n * to_cam, -1)
+    else:
+        facing = np.sum(n * (cam - p), -1)
+    # The differences' normal faces the camera on most pixels or on
+    # none (it follows the image's axes): one sign for the frame.
+    sign = 1.0 if np.nanmedian(np.sign(facing)) >= 0 else -1.0
+    return sign * H
+
+
+def metrics(img, ref, mask, halves):
+    import compare_metrics as cm
+    m = cm.all_metrics(img, ref, mask, 1.0, halves)
+    return dict(rmse_q_c=m["rmse_q_c"], rmse_c=m["rmse_c"],
+                mean_ratio=float(img[mask].mean() / ref[mask].mean()))
+
+
+def picture(path, ref, ours, qerr, cause, mask):
+    scale = np.percentile(ref[mask], 99) if mask.any() else 1.0
+
+    def show(a):
+        return np.clip(a / max(scale, 1e-6), 0, 1) ** (1 / 2.2)
+    h4, w4 = qerr.shape
+    up = np.kron(qerr, np.ones((4, 4)))
+    e = np.clip(up / max(np.percentile(qerr[cause >= 0], 99), 1e-6), 0, 1)
+    colours = np.array([[0.9, 0.2, 0.2], [0.2, 0.4, 1.0], [0.2, 0.9, 0.3],
+                        [1.0, 0.8, 0.1], [0.5, 0.5, 0.5]])
+    c = np.zeros((h4 * 4, w4 * 4, 3))
+    cu = np.kron(cause, np.ones((4, 4), int))
+    for i in range(len(CAUSES)):
+        c[cu == i] = colours[i]
+    h, w = h4 * 4, w4 * 4
+    row = np.concatenate([show(ref[:h, :w]), show(ours[:h, :w]),
+                          np.repeat(e[..., None], 3, -1), c], axis=1)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    plt.imsave(path, np.clip(row, 0, 1))
+
+
+def markdown(results):
+    out = ["| scene | ours + OIDN, quarter-res RMSE | calibration | " +
+           " | ".join(CAUSES) + " |", "|---|---|" + "---|" * (1 + len(CAUSES))]
+    for r in results:
+        b = r["budget"]
+        cells = [f"{100 * b['calibration']['share']:.0f} %"]
+        for k in CAUSES:
+            if k not in b:
+                cells.append("")
+                continue
+            plain = b[k].get("rmse_plain")
+            cells.append(f"{100 * b[k]['share']:.0f} % "
+                         f"({100 * b[k]['blocks']:.0f} % "
+                         f"of blocks, {b[k]['rmse']:.3f}" +
+                         (f"; no SSS {plain:.3f}" if plain is not None
+                          else "") + ")")
+        out.append(f"| {r['scene']} | {b['total']['rmse']:.4f} | " +
+                   " | ".join(cells) + " |")
+    out += ["", "| scene | run | samples | seconds | quarter-res RMSE | "
+            "mean over the walk's |", "|---|---|---|---|---|---|"]
+    for r in results:
+        for x in r["runs"]:
+            out.append(f"| {r['scene']} | {x['what']} | {x['samples']} | "
+                       f"{x['seconds']:.1f} | {x['rmse_q_c']:.4f} | "
+                       f"{x['mean_ratio']:.3f} |")
+    return "\n".join(out) + "\n"
+
+
+def summary(folder):
+    results = [json.load(open(p)) for p in
+               sorted(glob.glob(os.path.join(folder, "*", "budget.json")))]
+    with open(os.path.join(folder, "summary.md"), "w") as f:
+        f.write(markdown(results))
+    log(f"wrote {folder}/summary.md ({len(results)} scenes)")
+
+
+def main():
+    args = parse_args()
+    if args.summary:
+        summary(os.path.abspath(args.summary))
+        return
+    os.environ.setdefault("SSS_LIB", os.path.join(os.path.dirname(HERE),
+                                                  "build", "libsss.so"))
+    import compare_runs  # noqa: F401  (puts the add-on on sys.path)
+    import separable_sss
+    separable_sss.register()
+    try:
+        run(args)
+    finally:
+        separable_sss.unregister()
+
+
+if __name__ == "__main__":
+    run_main(main)

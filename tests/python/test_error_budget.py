@@ -1,0 +1,96 @@
+"""The error budget's split by cause (blender_scripts/error_budget.py) on
+synthetic frames whose error has one known cause."""
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..",
+                                "blender_scripts"))
+import error_budget as eb  # noqa: E402
+
+
+def frame(h=32, w=48):
+    """Two materials side by side on one plane (a silhouette between
+    them), no back light, flat; the reference's halves equal (no noise)."""
+    rng = np.random.default_rng(1)
+    ref = rng.uniform(0.2, 1.0, (h, w, 3))
+    idx = np.ones((h, w))
+    idx[:, w // 2:] = 2
+    depth = np.full((h, w), 5.0)
+    mask = np.ones((h, w), bool)
+    flat = np.zeros((h, w))
+    return ref, idx, depth, mask, flat
+
+
+def split(ours, ref, idx, depth, mask, back=None, curv=None):
+    flat = np.zeros(mask.shape)
+    rows, cause, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth,
+                               flat if back is None else back,
+                               flat if curv is None else curv)
+    return rows, cause
+
+
+def test_a_gain_per_material_is_calibration():
+    ref, idx, depth, mask, _ = frame()
+    ours = ref.copy()
+    ours[idx == 2] *= 1.2
+    rows, _ = split(ours, ref, idx, depth, mask)
+    assert abs(rows["calibration"]["share"] - 1.0) < 1e-9
+    assert all(abs(rows[k]["share"]) < 1e-9 for k in eb.CAUSES)
+    assert abs(rows["calibration"]["gains"][2][0] - 1 / 1.2) < 1e-9
+
+
+def test_an_error_along_the_silhouette_is_the_silhouettes():
+    ref, idx, depth, mask, _ = frame()
+    ours = ref.copy()
+    w = ref.shape[1]
+    rng = np.random.default_rng(2)
+    ours[:, w // 2 - 1:w // 2 + 1] += rng.normal(0, 0.1, (ref.shape[0], 2,
+                                                          3))
+    rows, cause = split(ours, ref, idx, depth, mask)
+    assert rows["silhouettes"]["share"] > 0.95
+    assert rows["rest"]["share"] < 0.05
+    assert (cause == 0).sum() == ref.shape[0] // 4 * 2
+
+
+def test_back_light_and_concave_blocks_are_told_apart():
+    ref, idx, depth, mask, _ = frame()
+    back = np.zeros(mask.shape)
+    back[:8, :16] = 0.5           # transmission: a corner, away from edges
+    curv = np.zeros(mask.shape)
+    curv[24:, :16] = -1.0         # a groove at the scale of the radius
+    ours = ref.copy()
+    ours[:8, :16] += 0.05
+    ours[24:, :16] -= 0.05
+    rows, _ = split(ours, ref, idx, depth, mask, back, curv)
+    assert abs(rows["transmission"]["share"] - 0.5) < 0.05
+    assert abs(rows["crevices"]["share"] - 0.5) < 0.05
+    assert rows["transmission"]["blocks"] == rows["crevices"]["blocks"] > 0
+
+
+def test_a_sharp_convex_edge_is_an_edge_not_a_crevice():
+    ref, idx, depth, mask, _ = frame()
+    idx[:] = 1                    # one material: no silhouette
+    curv = np.zeros(mask.shape)
+    curv[:, 10:12] = 50.0         # a sharp edge across the frame
+    ours = ref.copy()
+    rng = np.random.default_rng(3)   # in the blocks holding it
+    ours[:, 8:12] += rng.normal(0, 0.05, (ref.shape[0], 4, 3))
+    rows, _ = split(ours, ref, idx, depth, mask, curv=curv)
+    assert rows["edges"]["share"] > 0.95
+    assert rows["crevices"]["share"] == 0.0
+
+
+def test_the_render_without_sss_is_measured_in_the_same_blocks():
+    ref, idx, depth, mask, flat = frame()
+    w = ref.shape[1]
+    ours = ref.copy()
+    ours[:, w // 2 - 1:w // 2 + 1] += 0.1
+    plain = ours.copy()
+    plain[:, :8] -= 0.2           # away from the silhouette
+    rows, _, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth, flat,
+                           flat, plain)
+    assert abs(rows["silhouettes"]["rmse_plain"] -
+               rows["silhouettes"]["rmse"]) < 0.02
+    assert rows["rest"]["rmse_plain"] > 0.05 > rows["rest"]["rmse"]
