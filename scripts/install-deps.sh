@@ -8,15 +8,35 @@ set -u
 # (make compare) plots with matplotlib and renders EEVEE under Xvfb with
 # Mesa's software OpenGL. make bench times oiiotool (openimageio-tools).
 # python3-venv: the virtual environments for Blender 4.5 and 5.0 (bpy).
+# The portable builds (scripts/build_portable.py): Debian's source
+# packages of libdeflate and cJSON (the deb-src list below) with Debian's
+# patches (patch); the Windows build's tests run under Wine (wine64).
 PACKAGES="gcc make libc6-dev pkg-config binutils libpng-dev libopenexr-dev
 libcjson-dev libdeflate-dev blender python3 python3-venv python3-numpy python3-pytest python3-openimageio
-valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri openimageio-tools"
+valgrind python3-matplotlib xvfb xauth libgl1-mesa-dri openimageio-tools patch wine64"
+SOURCES=/etc/apt/sources.list.d/libsss-src.sources
+update=""
+if [ ! -e "$SOURCES" ] && [ "$(id -u)" = 0 ] && [ -d /etc/apt/sources.list.d ] &&
+	! grep -rqs "^Types:.*deb-src\|^deb-src" /etc/apt/sources.list /etc/apt/sources.list.d; then
+	. /etc/os-release
+	cat >"$SOURCES" <<EOF
+Types: deb-src
+URIs: http://deb.debian.org/debian
+Suites: $VERSION_CODENAME $VERSION_CODENAME-updates
+Components: main
+Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
+EOF
+	update=yes
+fi
 missing=""
 for p in $PACKAGES; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" \
 		|| missing="$missing $p"
 done
-[ -z "$missing" ] && exit 0
+if [ -z "$missing" ]; then
+	[ -z "$update" ] || apt-get update -qq
+	exit 0
+fi
 if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
 	echo "installing:$missing"
 	export DEBIAN_FRONTEND=noninteractive
