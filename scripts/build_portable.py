@@ -400,7 +400,31 @@ def build_platform(python, build, src, config, platform, jobs):
         if r.returncode != 0:
             fail(f"archiving {archive}: {r.stderr}")
         os.replace(tmp, archive)
-    return lib, exe
+    return lib, exe, cc, sss_flags, archive
+
+
+def build_tests(cc, flags, archive, out, platform, names):
+    """tests/NAME.c for this platform, linked with the portable objects,
+    into out/tests (NAME.exe on Windows)."""
+    suffix = ".exe" if platform.startswith("windows") else ""
+    tests = os.path.join(ROOT, "tests")
+    libs = [] if platform.startswith(("windows", "macos")) else ["-lm"]
+    built = []
+    for name in names:
+        source = os.path.join(tests, name + ".c")
+        if not os.path.isfile(source):
+            fail(f"--tests: no test {source}")
+        exe = os.path.join(out, "tests", name + suffix)
+        deps = [source, archive] + glob.glob(os.path.join(tests, "*.h"))
+        extra = (["-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc"]
+                 if name == "test_oom" else [])
+        if not (os.path.exists(exe) and os.path.getmtime(exe) >=
+                max(os.path.getmtime(d) for d in deps)):
+            os.makedirs(os.path.dirname(exe), exist_ok=True)
+            link(cc, flags + ["-I" + CSRC, "-I" + tests, source, archive] +
+                 libs + extra + ["-pthread"], exe)
+        built.append(exe)
+    return built
 
 
 def link(cc, args, path):
@@ -512,6 +536,9 @@ def main():
     p.add_argument("--platforms", default=DEFAULT_PLATFORMS,
                    help=f"comma-separated, of {', '.join(PLATFORMS)}")
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    p.add_argument("--tests", default="",
+                   help="comma-separated C tests (tests/NAME.c) to build "
+                   "for each platform, into BUILD/portable/PLATFORM/tests")
     args = p.parse_args()
     platforms = [x for x in args.platforms.split(",") if x]
     for x in platforms:
@@ -529,8 +556,11 @@ def main():
     licences(src, os.path.join(build, "portable"))
     problems = []
     for platform in platforms:
-        lib, exe = build_platform(python, build, src, config, platform,
-                                  args.jobs)
+        lib, exe, cc, flags, archive = build_platform(
+            python, build, src, config, platform, args.jobs)
+        if args.tests:
+            build_tests(cc, flags, archive, os.path.dirname(lib), platform,
+                        [t for t in args.tests.split(",") if t])
         lines = []
         for path in (lib, exe):
             line, bad = check(path, platform)

@@ -75,6 +75,9 @@ static void identify(HANDLE h, struct _stat64 *st)
 	st->st_dev = (_dev_t)(info.dwVolumeSerialNumber ^
 	                      (uint32_t)(index >> 16) ^ (uint32_t)(index >> 48));
 	st->st_ino = (_ino_t)(index & 0xffff);
+	/* The C runtime's fstat takes a directory's handle for a file. */
+	if (info.dwFileAttributes & FILE_ATTRIBUTE_DIRECTORY)
+		st->st_mode = (unsigned short)((st->st_mode & ~_S_IFMT) | _S_IFDIR);
 }
 
 int sss_win_stat(const char *path, struct _stat64 *st)
@@ -212,6 +215,83 @@ char *sss_win_strrchr(const char *s, int c)
 			last = back;
 	}
 	return last;
+}
+
+int sss_win_setenv(const char *name, const char *value, int overwrite)
+{
+	if (!overwrite && getenv(name))
+		return 0;
+	return _putenv_s(name, value) == 0 ? 0 : (errno = EINVAL, -1);
+}
+
+int sss_win_unsetenv(const char *name)
+{
+	return _putenv_s(name, "") == 0 ? 0 : (errno = EINVAL, -1);
+}
+
+/* The XXXXXX at the end of template_ replaced until a new folder can be
+ * made; its parent is made first when missing (a POSIX test's "/tmp"). */
+char *sss_win_mkdtemp(char *template_)
+{
+	size_t len = strlen(template_);
+	if (len < 6 || strcmp(template_ + len - 6, "XXXXXX") != 0) {
+		errno = EINVAL;
+		return NULL;
+	}
+	char *slash = sss_win_strrchr(template_, '/');
+	if (slash && slash != template_) {
+		char c = *slash;
+		*slash = '\0';
+		CreateDirectoryA(template_, NULL);
+		*slash = c;
+	}
+	static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz";
+	unsigned long long x = GetTickCount64() ^ ((uint64_t)GetCurrentProcessId()
+	                                            << 20) ^ (uintptr_t)template_;
+	for (int attempt = 0; attempt < 100; attempt++) {
+		unsigned long long y = x + (unsigned long long)attempt * 7919u;
+		for (int i = 0; i < 6; i++, y /= 36)
+			template_[len - 6 + i] = digits[y % 36];
+		if (CreateDirectoryA(template_, NULL))
+			return template_;
+		if (GetLastError() != ERROR_ALREADY_EXISTS) {
+			errno = errno_of(GetLastError());
+			return NULL;
+		}
+	}
+	errno = EEXIST;
+	return NULL;
+}
+
+int sss_win_sigmask(int how, const sigset_t *set, sigset_t *old)
+{
+	(void)how;
+	(void)set;
+	if (old)
+		*old = 0;
+	return 0;
+}
+
+static VOID CALLBACK alarm_fired(PVOID arg, BOOLEAN fired)
+{
+	(void)arg;
+	(void)fired;
+	fputs("alarm: time is up\n", stderr);
+	ExitProcess(142); /* 128 + SIGALRM, as a shell reports it */
+}
+
+/* One alarm at a time, as POSIX: a new call replaces the last one. */
+unsigned sss_win_alarm(unsigned seconds)
+{
+	static HANDLE timer;
+	if (timer) {
+		DeleteTimerQueueTimer(NULL, timer, NULL);
+		timer = NULL;
+	}
+	if (seconds)
+		CreateTimerQueueTimer(&timer, NULL, alarm_fired, NULL,
+		                      seconds * 1000u, 0, WT_EXECUTEONLYONCE);
+	return 0;
 }
 
 #endif /* _WIN32 */

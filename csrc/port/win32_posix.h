@@ -11,9 +11,11 @@
  *   0), so that "the input itself" is still recognised as an output.
  * - flock() is LockFileEx on the whole file; pread()/pwrite() are ReadFile
  *   and WriteFile at an offset.
- * - No symbolic links (lstat is stat), no signal masks (winpthreads'
- *   pthread_sigmask does nothing), sigaction() is signal().
- * - A path's last separator is '/' or '\\' (strrchr of '/'). */
+ * - No symbolic links (lstat is stat), no signal masks (pthread_sigmask
+ *   changes nothing and gives an empty old mask), sigaction() is signal().
+ * - A path's last separator is '/' or '\\' (strrchr of '/').
+ * - setenv, unsetenv and mkdtemp, which the C tests use; alarm() (a
+ *   test's watchdog) ends the process after that many seconds. */
 #ifndef SSS_WIN32_POSIX_H
 #define SSS_WIN32_POSIX_H
 #ifdef _WIN32
@@ -103,6 +105,11 @@ int sss_win_sigaction(int sig, const struct sigaction *sa,
                       struct sigaction *old);
 int sss_win_strerror_r(int e, char *buf, size_t n);
 char *sss_win_strrchr(const char *s, int c);
+int sss_win_setenv(const char *name, const char *value, int overwrite);
+int sss_win_unsetenv(const char *name);
+char *sss_win_mkdtemp(char *template_);
+int sss_win_sigmask(int how, const sigset_t *set, sigset_t *old);
+unsigned sss_win_alarm(unsigned seconds);
 
 #define open sss_win_open
 #define _stat64(p, s) sss_win_stat(p, s)
@@ -118,6 +125,12 @@ char *sss_win_strrchr(const char *s, int c);
 #define sigaction(s, a, o) sss_win_sigaction(s, a, o)
 #define strerror_r sss_win_strerror_r
 #define strrchr(s, c) sss_win_strrchr(s, c)
+#define setenv sss_win_setenv
+#define unsetenv sss_win_unsetenv
+#define mkdtemp sss_win_mkdtemp
+#undef pthread_sigmask
+#define pthread_sigmask sss_win_sigmask
+#define alarm sss_win_alarm
 
 #endif /* _WIN32 */
 #endif
