@@ -15,6 +15,14 @@
 #   make bpy      install Blender 4.5 and 5.0 as Python modules into build/
 #   make addon    the add-on: build/separable_sss.zip (3.4) and the
 #                 extension build/separable_sss-VERSION-PLATFORM.zip (4.2+)
+#   make portable the library and sss for linux-x64, windows-x64,
+#                 macos-arm64 and macos-x64, self-contained (OpenEXR,
+#                 libdeflate, cJSON linked in), cross-compiled with Zig:
+#                 build/portable/PLATFORM
+#   make portable-test  their C tests and sss runs: Linux natively,
+#                 Windows under Wine; every build's dependencies checked
+#   make dist     build/dist: one extension zip per platform, the 3.4 zip
+#                 and the sss command per platform (sss-VERSION-PLATFORM.zip)
 #   make blender-test  the add-on's tests in every supported Blender
 #   make demo     render the bundled head-sized skin scene headlessly with
 #                 the add-on: out/demo.exr and out/demo.png (before | after)
@@ -55,7 +63,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps bpy test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures screenshots clean
+.PHONY: all deps bpy portable portable-test dist test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep figures screenshots clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -112,6 +120,7 @@ PYTHON ?= /usr/bin/python3
 test: deps all $(TESTS) addon $(BUILD)/sss-bench
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
+	@$(MAKE) --no-print-directory portable-test
 	@$(MAKE) --no-print-directory blender-test
 	@if command -v valgrind >/dev/null; then \
 		$(MAKE) --no-print-directory valgrind; \
@@ -154,6 +163,53 @@ EXTENSION_ZIP := $(BUILD)/separable_sss-$(ADDON_VERSION)-$(ADDON_PLATFORM).zip
 addon: $(BUILD)/separable_sss.zip
 $(BUILD)/separable_sss.zip: $(ADDON_FILES) $(BUILD)/libsss.so scripts/build_addon.py
 	@$(PYTHON) scripts/build_addon.py --library $(BUILD)/libsss.so --out $(BUILD)
+
+# Self-contained builds for every platform Blender runs on, cross-compiled
+# with Zig (PyPI's ziglang, pinned) from pinned, hash-checked sources
+# (scripts/build_portable.py); objects are kept, so a second run only
+# checks. The C tests are built for each platform too, except test_exr (its
+# own EXR writer calls OpenEXR 3.1's API in a way 3.3 refuses) and test_oom
+# (ld's --wrap, which Zig's linker lacks); the Debian build runs those.
+PORTABLE_PLATFORMS ?= linux-x64,windows-x64,macos-arm64,macos-x64
+PORTABLE_TESTS := $(filter-out test_exr test_oom,$(patsubst tests/%.c,%,$(TEST_SRC)))
+portable:
+	@$(PYTHON) scripts/build_portable.py --build $(BUILD) \
+		--platforms $(PORTABLE_PLATFORMS) \
+		--tests $(shell echo $(PORTABLE_TESTS) | tr ' ' ,)
+
+# The portable builds' C tests: linux-x64 natively, windows-x64 under Wine
+# (skipped with a message where wine64 is missing); then the sss commands
+# against the Debian build's output, bit for bit, and every build's
+# dependencies (tests/python/test_portable.py). macOS builds are checked,
+# not run.
+WINE ?= $(firstword $(wildcard /usr/lib/wine/wine64) $(shell command -v wine64 2>/dev/null))
+portable-test: portable all
+	@sh tests/run_c_tests.sh $(BUILD)/portable/linux-x64 \
+		$(patsubst %,$(BUILD)/portable/linux-x64/tests/%,$(PORTABLE_TESTS))
+	@if [ -n "$(WINE)" ]; then \
+		WINEDEBUG=-all WINEPREFIX=$(abspath $(BUILD))/wine \
+		TEST_RUNNER="$(WINE)" sh tests/run_c_tests.sh \
+		$(BUILD)/portable/windows-x64 \
+		$(patsubst %,$(BUILD)/portable/windows-x64/tests/%.exe,$(PORTABLE_TESTS)); \
+	else echo "portable-test: Windows C tests skipped (wine64 is not installed)"; fi
+	@SSS_BUILD=$(abspath $(BUILD)) SSS_WINE="$(WINE)" $(PYTHON) -m pytest -q \
+		-p no:cacheprovider tests/python/test_portable.py
+
+# What to download for each machine, in build/dist: the extension per
+# platform, the legacy 3.4 zip (with the portable Linux library) and the
+# sss command per platform, each with the licences of what is linked in.
+comma := ,
+DIST_PLATFORMS := $(subst $(comma), ,$(PORTABLE_PLATFORMS))
+dist: portable
+	@mkdir -p $(BUILD)/dist
+	@for p in $(DIST_PLATFORMS); do \
+		d=$(BUILD)/portable/$$p; \
+		lib=$$(ls $$d/libsss.so $$d/libsss.dll $$d/libsss.dylib 2>/dev/null); \
+		exe=$$(ls $$d/sss $$d/sss.exe 2>/dev/null); \
+		$(PYTHON) scripts/build_addon.py --library $$lib --platform $$p \
+			--command $$exe --out $(BUILD)/dist \
+			--licences $(BUILD)/portable/THIRD_PARTY_LICENSES.txt || exit 1; \
+	done
 
 # Supported Blenders: Debian's blender (3.4) and, from PyPI, Blender as a
 # Python module (bpy, pinned), each in a virtual environment under the

@@ -331,7 +331,9 @@ def units(src, platform, config):
         # flock beside POSIX; NAME_MAX is in limits.h there, which
         # glibc's dirent.h includes.
         port = ["-D_DARWIN_C_SOURCE", "-include", "limits.h"]
-    inc = ["-I" + exr, "-I" + config, "-I" + deflate, "-I" + cjson]
+    # cJSON.h marks its functions dllexport on Windows unless told not to.
+    inc = ["-I" + exr, "-I" + config, "-I" + deflate, "-I" + cjson,
+           "-DCJSON_HIDE_SYMBOLS"]
     out = []
     for f in sorted(glob.glob(os.path.join(exr, "*.c"))):
         out.append((f, "openexr/" + os.path.basename(f),
@@ -343,7 +345,7 @@ def units(src, platform, config):
         out.append((f, "deflate/" + rel.replace("/", "_"),
                     CFLAGS + ["-std=gnu11", "-w", "-I" + deflate]))
     out.append((os.path.join(cjson, "cJSON.c"), "cjson/cJSON.c",
-                CFLAGS + ["-std=c89", "-w"]))
+                CFLAGS + ["-std=c89", "-w", "-DCJSON_HIDE_SYMBOLS"]))
     lib = sorted(f for f in glob.glob(os.path.join(CSRC, "sss_*.c"))
                  if not f.endswith("sss_main.c"))
     if windows:
