@@ -119,9 +119,10 @@ PYTHON ?= /usr/bin/python3
 
 test: deps all $(TESTS) addon $(BUILD)/sss-bench
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
-	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
-	@$(MAKE) --no-print-directory portable-test
+	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider \
+		--ignore=tests/python/test_portable.py tests/python
 	@$(MAKE) --no-print-directory blender-test
+	@$(MAKE) --no-print-directory portable-test
 	@if command -v valgrind >/dev/null; then \
 		$(MAKE) --no-print-directory valgrind; \
 	else echo "make valgrind: skipped (valgrind is not installed)"; fi
@@ -147,7 +148,7 @@ check:
 		$(BUILD)/check/sss $(BUILD)/check/sss-bench
 	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
 		SSS_BUILD=$(abspath $(BUILD))/check $(PYTHON) -m pytest -q \
-		-p no:cacheprovider tests/python
+		-p no:cacheprovider --ignore=tests/python/test_portable.py tests/python
 	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
 		sh tests/run_c_tests.sh $(BUILD)/check \
 		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS))
@@ -180,10 +181,11 @@ portable:
 # The portable builds' C tests: linux-x64 natively, windows-x64 under Wine
 # (skipped with a message where wine64 is missing); then the sss commands
 # against the Debian build's output, bit for bit, and every build's
-# dependencies (tests/python/test_portable.py). macOS builds are checked,
-# not run.
+# dependencies (tests/python/test_portable.py); then build/dist's Linux
+# zips (the portable library) installed into every supported Blender.
+# macOS builds are checked, not run.
 WINE ?= $(firstword $(wildcard /usr/lib/wine/wine64) $(shell command -v wine64 2>/dev/null))
-portable-test: portable all
+portable-test: dist all
 	@sh tests/run_c_tests.sh $(BUILD)/portable/linux-x64 \
 		$(patsubst %,$(BUILD)/portable/linux-x64/tests/%,$(PORTABLE_TESTS))
 	@if [ -n "$(WINE)" ]; then \
@@ -194,6 +196,11 @@ portable-test: portable all
 	else echo "portable-test: Windows C tests skipped (wine64 is not installed)"; fi
 	@SSS_BUILD=$(abspath $(BUILD)) SSS_WINE="$(WINE)" $(PYTHON) -m pytest -q \
 		-p no:cacheprovider tests/python/test_portable.py
+	@status=0; for b in $(BLENDERS); do \
+		bash scripts/blender-tests.sh $$b $(abspath $(BUILD))/dist \
+			tests/blender/test_install.py tests/blender/test_extension.py \
+			|| status=1; \
+	done; exit $$status
 
 # What to download for each machine, in build/dist: the extension per
 # platform, the legacy 3.4 zip (with the portable Linux library) and the
