@@ -256,7 +256,8 @@ def zig_python(build):
     python = os.path.join(venv, "bin", "python")
     probe = [python, "-c", "import importlib.metadata as m, sys; "
              f"sys.exit(m.version('ziglang') != '{ZIG_VERSION}')"]
-    if subprocess.run(probe, capture_output=True).returncode == 0:
+    if os.path.exists(python) and \
+            subprocess.run(probe, capture_output=True).returncode == 0:
         return python
     machine = os.uname().machine
     if machine not in ZIG_HASHES:

@@ -3,12 +3,15 @@
 
 #ifdef _WIN32
 #include <stdarg.h>
+#include <stdlib.h>
 #include <windows.h>
 
 #undef open
 #undef _stat64
 #undef _fstat64
 #undef rename
+#undef access
+#undef unlink
 #undef strrchr
 
 static int errno_of(DWORD e)
@@ -39,6 +42,34 @@ static int errno_of(DWORD e)
 	}
 }
 
+/* path as UTF-16 (malloc'd), from UTF-8 or else the ANSI code page. */
+static wchar_t *wide(const char *path)
+{
+	UINT cp = CP_UTF8;
+	DWORD strict = MB_ERR_INVALID_CHARS;
+	int n = MultiByteToWideChar(cp, strict, path, -1, NULL, 0);
+	if (n <= 0) {
+		cp = CP_ACP;
+		strict = 0;
+		n = MultiByteToWideChar(cp, strict, path, -1, NULL, 0);
+	}
+	if (n <= 0) {
+		errno = EINVAL;
+		return NULL;
+	}
+	wchar_t *w = malloc((size_t)n * sizeof *w);
+	if (!w) {
+		errno = ENOMEM;
+		return NULL;
+	}
+	if (MultiByteToWideChar(cp, strict, path, -1, w, n) != n) {
+		free(w);
+		errno = EINVAL;
+		return NULL;
+	}
+	return w;
+}
+
 int sss_win_open(const char *path, int flags, ...)
 {
 	DWORD access = (flags & O_WRONLY) ? GENERIC_WRITE
@@ -48,10 +79,14 @@ int sss_win_open(const char *path, int flags, ...)
 	            : (flags & O_CREAT) && (flags & O_TRUNC) ? CREATE_ALWAYS
 	            : (flags & O_CREAT) ? OPEN_ALWAYS
 	            : (flags & O_TRUNC) ? TRUNCATE_EXISTING : OPEN_EXISTING;
-	HANDLE h = CreateFileA(path, access, FILE_SHARE_READ | FILE_SHARE_WRITE |
+	wchar_t *w = wide(path);
+	if (!w)
+		return -1;
+	HANDLE h = CreateFileW(w, access, FILE_SHARE_READ | FILE_SHARE_WRITE |
 	                       FILE_SHARE_DELETE, NULL, how,
 	                       FILE_ATTRIBUTE_NORMAL | FILE_FLAG_BACKUP_SEMANTICS,
 	                       NULL);
+	free(w);
 	if (h == INVALID_HANDLE_VALUE) {
 		errno = errno_of(GetLastError());
 		return -1;
@@ -82,11 +117,17 @@ static void identify(HANDLE h, struct _stat64 *st)
 
 int sss_win_stat(const char *path, struct _stat64 *st)
 {
-	if (_stat64(path, st) != 0)
+	wchar_t *w = wide(path);
+	if (!w)
 		return -1;
-	HANDLE h = CreateFileA(path, 0, FILE_SHARE_READ | FILE_SHARE_WRITE |
+	if (_wstat64(w, st) != 0) {
+		free(w);
+		return -1;
+	}
+	HANDLE h = CreateFileW(w, 0, FILE_SHARE_READ | FILE_SHARE_WRITE |
 	                       FILE_SHARE_DELETE, NULL, OPEN_EXISTING,
 	                       FILE_FLAG_BACKUP_SEMANTICS, NULL);
+	free(w);
 	identify(h, st);
 	if (h != INVALID_HANDLE_VALUE)
 		CloseHandle(h);
@@ -103,10 +144,32 @@ int sss_win_fstat(int fd, struct _stat64 *st)
 
 int sss_win_rename(const char *from, const char *to)
 {
-	if (MoveFileExA(from, to, MOVEFILE_REPLACE_EXISTING))
+	wchar_t *a = wide(from), *b = a ? wide(to) : NULL;
+	BOOL ok = b && MoveFileExW(a, b, MOVEFILE_REPLACE_EXISTING);
+	DWORD e = GetLastError();
+	int err = errno;
+	free(a);
+	free(b);
+	if (ok)
 		return 0;
-	errno = errno_of(GetLastError());
+	errno = b ? errno_of(e) : err;
 	return -1;
+}
+
+int sss_win_access(const char *path, int mode)
+{
+	wchar_t *w = wide(path);
+	int r = w ? _waccess(w, mode & ~1) : -1; /* no X_OK on Windows */
+	free(w);
+	return r;
+}
+
+int sss_win_unlink(const char *path)
+{
+	wchar_t *w = wide(path);
+	int r = w ? _wunlink(w) : -1;
+	free(w);
+	return r;
 }
 
 int sss_win_flock(int fd, int op)
@@ -242,7 +305,10 @@ char *sss_win_mkdtemp(char *template_)
 	if (slash && slash != template_) {
 		char c = *slash;
 		*slash = '\0';
-		CreateDirectoryA(template_, NULL);
+		wchar_t *parent = wide(template_);
+		if (parent)
+			CreateDirectoryW(parent, NULL);
+		free(parent);
 		*slash = c;
 	}
 	static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz";
@@ -252,10 +318,16 @@ char *sss_win_mkdtemp(char *template_)
 		unsigned long long y = x + (unsigned long long)attempt * 7919u;
 		for (int i = 0; i < 6; i++, y /= 36)
 			template_[len - 6 + i] = digits[y % 36];
-		if (CreateDirectoryA(template_, NULL))
+		wchar_t *w = wide(template_);
+		if (!w)
+			return NULL;
+		BOOL made = CreateDirectoryW(w, NULL);
+		DWORD e = GetLastError();
+		free(w);
+		if (made)
 			return template_;
-		if (GetLastError() != ERROR_ALREADY_EXISTS) {
-			errno = errno_of(GetLastError());
+		if (e != ERROR_ALREADY_EXISTS) {
+			errno = errno_of(e);
 			return NULL;
 		}
 	}

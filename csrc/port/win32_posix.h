@@ -13,6 +13,10 @@
  *   and WriteFile at an offset.
  * - No symbolic links (lstat is stat), no signal masks (pthread_sigmask
  *   changes nothing and gives an empty old mask), sigaction() is signal().
+ * - Paths are UTF-8 (as Blender and Python give them), opened through
+ *   Windows' wide-character API: open, stat, rename, access, unlink and
+ *   mkdtemp (a path that is not UTF-8 is taken in the ANSI code page).
+ *   Listing a folder (opendir, for stale temporaries) stays ANSI.
  * - A path's last separator is '/' or '\\' (strrchr of '/').
  * - setenv, unsetenv and mkdtemp, which the C tests use; alarm() (a
  *   test's watchdog) ends the process after that many seconds. */
@@ -95,6 +99,8 @@ int sss_win_open(const char *path, int flags, ...);
 int sss_win_stat(const char *path, struct _stat64 *st);
 int sss_win_fstat(int fd, struct _stat64 *st);
 int sss_win_rename(const char *from, const char *to);
+int sss_win_access(const char *path, int mode);
+int sss_win_unlink(const char *path);
 int sss_win_flock(int fd, int op);
 ssize_t sss_win_pread(int fd, void *buf, size_t n, int64_t offset);
 ssize_t sss_win_pwrite(int fd, const void *buf, size_t n, int64_t offset);
@@ -116,6 +122,8 @@ unsigned sss_win_alarm(unsigned seconds);
 #define lstat(p, s) sss_win_stat(p, s)
 #define _fstat64(f, s) sss_win_fstat(f, s)
 #define rename(a, b) sss_win_rename(a, b)
+#define access(p, m) sss_win_access(p, m)
+#define unlink(p) sss_win_unlink(p)
 #define flock(f, o) sss_win_flock(f, o)
 #define pread sss_win_pread
 #define pwrite sss_win_pwrite

@@ -135,3 +135,48 @@ def test_sss_gives_the_debian_builds_bits(platform, method, debian_outputs,
     differ = [n for n in want if got[n].tobytes() != want[n].tobytes()]
     assert not differ, f"{platform} {method}: channels differ: {differ}"
     assert not [p for p in os.listdir(tmp_path) if ".tmp-" in p]
+
+
+def wine_env():
+    return dict(os.environ, WINEDEBUG="-all",
+                WINEPREFIX=os.path.join(os.path.abspath(BUILD), "wine"))
+
+
+def test_windows_sss_writes_non_ascii_paths_beside_its_input(tmp_path):
+    """UTF-8 paths through Windows' wide API, the temporary renamed over
+    a file that exists, nothing left behind."""
+    if not WINE:
+        pytest.skip("wine64 is not installed")
+    sss = built("windows-x64", "sss.exe")
+    folder = tmp_path / "Render \u00dcbung"
+    folder.mkdir()
+    src = folder / "frame.exr"
+    shutil.copy(os.path.join(DATA, "blender_8x8.exr"), src)
+    out = folder / "r\u00e9sultat.exr"
+    for _ in range(2):  # the second run replaces the first's output
+        r = subprocess.run([WINE, sss, str(src), "-o", str(out), "--scene",
+                            os.path.join(DATA, "blender_8x8.json"), "-q"],
+                           capture_output=True, text=True, env=wine_env())
+        assert r.returncode == 0, r.stderr
+        assert out.exists()
+    assert sorted(os.listdir(folder)) == ["frame.exr", "r\u00e9sultat.exr"]
+    assert "SSS.Combined.R" in read_raw(out)
+
+
+def test_windows_sss_refuses_to_overwrite_its_input(tmp_path):
+    """The same file under another spelling (backslashes, a drive letter)
+    is still the input: refused, the input untouched."""
+    if not WINE:
+        pytest.skip("wine64 is not installed")
+    sss = built("windows-x64", "sss.exe")
+    src = tmp_path / "frame.exr"
+    shutil.copy(os.path.join(DATA, "blender_8x8.exr"), src)
+    before = src.read_bytes()
+    other = "Z:" + str(src).replace("/", "\\")
+    r = subprocess.run([WINE, sss, str(src), "-o", other, "--scene",
+                        os.path.join(DATA, "blender_8x8.json"), "-q"],
+                       capture_output=True, text=True, env=wine_env())
+    assert r.returncode != 0
+    assert "refusing to overwrite" in r.stderr, r.stderr
+    assert src.read_bytes() == before
+    assert os.listdir(tmp_path) == ["frame.exr"]
