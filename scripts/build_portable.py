@@ -451,7 +451,13 @@ def tool(args):
     return r.stdout
 
 
-def check_elf(path):
+ELF_MACHINES = {"linux-x64": "Advanced Micro Devices X86-64",
+                "linux-arm64": "AArch64"}
+
+
+def check_elf(path, platform):
+    machine = re.search(r"Machine:\s+(.+)", tool(["readelf", "-h", path]))
+    machine = machine.group(1).strip() if machine else "?"
     needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]",
                         tool(["readelf", "-d", path]))
     versions = sorted({tuple(int(x) for x in v.split("."))
@@ -463,7 +469,10 @@ def check_elf(path):
     if versions and versions[-1] > GLIBC_BASELINE:
         problems.append(f"needs glibc {newest}, newer than the baseline "
                         f"{'.'.join(map(str, GLIBC_BASELINE))}")
-    return needed, f"newest glibc symbol version {newest}", problems
+    if machine != ELF_MACHINES[platform]:
+        problems.append(f"is for {machine}, not {ELF_MACHINES[platform]}")
+    return needed, f"ELF {machine}, newest glibc symbol version {newest}", \
+        problems
 
 
 def check_pe(path):
@@ -513,7 +522,7 @@ def check_macho(path, platform):
 
 def check(path, platform):
     if platform.startswith("linux"):
-        deps, note, problems = check_elf(path)
+        deps, note, problems = check_elf(path, platform)
     elif platform.startswith("windows"):
         deps, note, problems = check_pe(path)
     else:
