@@ -180,3 +180,35 @@ def test_windows_sss_refuses_to_overwrite_its_input(tmp_path):
     assert "refusing to overwrite" in r.stderr, r.stderr
     assert src.read_bytes() == before
     assert os.listdir(tmp_path) == ["frame.exr"]
+
+
+def test_linux_sss_runs_in_a_root_with_nothing_but_glibc(tmp_path,
+                                                         debian_outputs):
+    """The linux-x64 command in a chroot holding only glibc's libc, libm,
+    libpthread and loader: no OpenEXR, libdeflate or cJSON anywhere."""
+    if os.geteuid() != 0 or not hasattr(os, "chroot"):
+        pytest.skip("a chroot needs root")
+    sss = built("linux-x64", "sss")
+    loader = "/lib64/ld-linux-x86-64.so.2"
+    libdir = os.path.dirname(os.path.realpath("/lib/x86_64-linux-gnu/libc.so.6"))
+    if not os.path.exists(loader) or not os.path.isdir(libdir):
+        pytest.skip("not an x86-64 glibc system")
+    root = tmp_path / "root"
+    for d in ("lib64", "lib/x86_64-linux-gnu", "work"):
+        (root / d).mkdir(parents=True)
+    shutil.copy(os.path.realpath(loader), root / "lib64" /
+                "ld-linux-x86-64.so.2")
+    for lib in ("libc.so.6", "libm.so.6", "libpthread.so.0"):
+        shutil.copy(os.path.join(libdir, lib),
+                    root / "lib" / "x86_64-linux-gnu" / lib)
+    shutil.copy(sss, root / "sss")
+    shutil.copy(os.path.join(DATA, "blender_8x8.exr"), root / "work" / "in.exr")
+    shutil.copy(os.path.join(DATA, "blender_8x8.json"),
+                root / "work" / "in.json")
+    r = subprocess.run(["chroot", str(root), "/sss", "/work/in.exr", "-o",
+                        "/work/out.exr", "--scene", "/work/in.json", "-m",
+                        "separable", "-q"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    want = read_raw(debian_outputs / "separable.exr")
+    got = read_raw(root / "work" / "out.exr")
+    assert all(got[n].tobytes() == want[n].tobytes() for n in want)
