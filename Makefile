@@ -15,6 +15,14 @@
 #   make bpy      install Blender 4.5 and 5.0 as Python modules into build/
 #   make addon    the add-on: build/separable_sss.zip (3.4) and the
 #                 extension build/separable_sss-VERSION-PLATFORM.zip (4.2+)
+#   make portable the library and sss for linux-x64, windows-x64,
+#                 macos-arm64 and macos-x64, self-contained (OpenEXR,
+#                 libdeflate, cJSON linked in), cross-compiled with Zig:
+#                 build/portable/PLATFORM
+#   make portable-test  their C tests and sss runs: Linux natively,
+#                 Windows under Wine; every build's dependencies checked
+#   make dist     build/dist: one extension zip per platform, the 3.4 zip
+#                 and the sss command per platform (sss-VERSION-PLATFORM.zip)
 #   make blender-test  the add-on's tests in every supported Blender
 #   make farm-test the OpenJD template (openjd run) and the Flamenco job type
 #                 (compiled under Node) on 3 frames in Blender 3.4, 4.5, 5.0
@@ -58,7 +66,7 @@ TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay
 
-.PHONY: all deps bpy farm-test test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep error-budget figures screenshots clean
+.PHONY: all deps bpy farm-test portable portable-test dist test check valgrind fuzz demo demo-c report bench addon blender-test compare sweep error-budget figures screenshots clean
 
 all: $(BUILD)/libsss.so $(BUILD)/sss
 
@@ -114,9 +122,11 @@ PYTHON ?= /usr/bin/python3
 
 test: deps all $(TESTS) addon $(BUILD)/sss-bench $(BUILD)/sss-retune
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
-	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider tests/python
+	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider \
+		--ignore=tests/python/test_portable.py tests/python
 	@$(MAKE) --no-print-directory blender-test
 	@$(MAKE) --no-print-directory farm-test
+	@$(MAKE) --no-print-directory portable-test
 	@if command -v valgrind >/dev/null; then \
 		$(MAKE) --no-print-directory valgrind; \
 	else echo "make valgrind: skipped (valgrind is not installed)"; fi
@@ -142,7 +152,7 @@ check:
 		$(BUILD)/check/sss $(BUILD)/check/sss-bench $(BUILD)/check/sss-retune
 	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
 		SSS_BUILD=$(abspath $(BUILD))/check $(PYTHON) -m pytest -q \
-		-p no:cacheprovider tests/python
+		-p no:cacheprovider --ignore=tests/python/test_portable.py tests/python
 	@ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:exitcode=87 \
 		sh tests/run_c_tests.sh $(BUILD)/check \
 		$(patsubst $(BUILD)/%,$(BUILD)/check/%,$(TESTS))
@@ -158,6 +168,59 @@ EXTENSION_ZIP := $(BUILD)/separable_sss-$(ADDON_VERSION)-$(ADDON_PLATFORM).zip
 addon: $(BUILD)/separable_sss.zip
 $(BUILD)/separable_sss.zip: $(ADDON_FILES) $(BUILD)/libsss.so scripts/build_addon.py
 	@$(PYTHON) scripts/build_addon.py --library $(BUILD)/libsss.so --out $(BUILD)
+
+# Self-contained builds for every platform Blender runs on, cross-compiled
+# with Zig (PyPI's ziglang, pinned) from pinned, hash-checked sources
+# (scripts/build_portable.py); objects are kept, so a second run only
+# checks. The C tests are built for each platform too, except test_exr (its
+# own EXR writer calls OpenEXR 3.1's API in a way 3.3 refuses) and test_oom
+# (ld's --wrap, which Zig's linker lacks); the Debian build runs those.
+PORTABLE_PLATFORMS ?= linux-x64,windows-x64,macos-arm64,macos-x64
+PORTABLE_TESTS := $(filter-out test_exr test_oom,$(patsubst tests/%.c,%,$(TEST_SRC)))
+portable:
+	@$(PYTHON) scripts/build_portable.py --build $(BUILD) \
+		--platforms $(PORTABLE_PLATFORMS) \
+		--tests $(shell echo $(PORTABLE_TESTS) | tr ' ' ,)
+
+# The portable builds' C tests: linux-x64 natively, windows-x64 under Wine
+# (skipped with a message where wine64 is missing); then the sss commands
+# against the Debian build's output, bit for bit, and every build's
+# dependencies (tests/python/test_portable.py); then build/dist's Linux
+# zips (the portable library) installed into every supported Blender.
+# macOS builds are checked, not run.
+WINE ?= $(firstword $(wildcard /usr/lib/wine/wine64) $(shell command -v wine64 2>/dev/null))
+portable-test: dist all
+	@sh tests/run_c_tests.sh $(BUILD)/portable/linux-x64 \
+		$(patsubst %,$(BUILD)/portable/linux-x64/tests/%,$(PORTABLE_TESTS))
+	@if [ -n "$(WINE)" ]; then \
+		WINEDEBUG=-all WINEPREFIX=$(abspath $(BUILD))/wine \
+		TEST_RUNNER="$(WINE)" sh tests/run_c_tests.sh \
+		$(BUILD)/portable/windows-x64 \
+		$(patsubst %,$(BUILD)/portable/windows-x64/tests/%.exe,$(PORTABLE_TESTS)); \
+	else echo "portable-test: Windows C tests skipped (wine64 is not installed)"; fi
+	@SSS_BUILD=$(abspath $(BUILD)) SSS_WINE="$(WINE)" $(PYTHON) -m pytest -q \
+		-p no:cacheprovider tests/python/test_portable.py
+	@status=0; for b in $(BLENDERS); do \
+		bash scripts/blender-tests.sh $$b $(abspath $(BUILD))/dist \
+			tests/blender/test_install.py tests/blender/test_extension.py \
+			|| status=1; \
+	done; exit $$status
+
+# What to download for each machine, in build/dist: the extension per
+# platform, the legacy 3.4 zip (with the portable Linux library) and the
+# sss command per platform, each with the licences of what is linked in.
+comma := ,
+DIST_PLATFORMS := $(subst $(comma), ,$(PORTABLE_PLATFORMS))
+dist: portable
+	@mkdir -p $(BUILD)/dist
+	@for p in $(DIST_PLATFORMS); do \
+		d=$(BUILD)/portable/$$p; \
+		lib=$$(ls $$d/libsss.so $$d/libsss.dll $$d/libsss.dylib 2>/dev/null); \
+		exe=$$(ls $$d/sss $$d/sss.exe 2>/dev/null); \
+		$(PYTHON) scripts/build_addon.py --library $$lib --platform $$p \
+			--command $$exe --out $(BUILD)/dist \
+			--licences $(BUILD)/portable/THIRD_PARTY_LICENSES.txt || exit 1; \
+	done
 
 # Supported Blenders: Debian's blender (3.4) and, from PyPI, Blender as a
 # Python module (bpy, pinned), each in a virtual environment under the

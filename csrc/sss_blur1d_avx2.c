@@ -8,12 +8,23 @@
 #if (defined(__x86_64__) || defined(__i386__)) && \
     (defined(__GNUC__) || defined(__clang__))
 
+#include <cpuid.h>
 #include <immintrin.h>
 
+/* CPUID and XGETBV themselves rather than __builtin_cpu_supports: its
+ * data (__cpu_model) comes from libgcc or compiler-rt, which not every
+ * toolchain links into a shared library (Zig's, for the portable builds). */
 int sss__blur1d_avx2_supported(void)
 {
-	__builtin_cpu_init();
-	return __builtin_cpu_supports("avx2");
+	unsigned a, b, c, d, lo, hi;
+	if (!__get_cpuid(1, &a, &b, &c, &d) || !(c & bit_OSXSAVE) ||
+	    !(c & bit_AVX))
+		return 0;
+	__asm__ volatile("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+	(void)hi;
+	if ((lo & 6) != 6) /* the system saves the XMM and YMM registers */
+		return 0;
+	return __get_cpuid_count(7, 0, &a, &b, &c, &d) && (b & bit_AVX2);
 }
 
 #define AVX2 __attribute__((target("avx2")))

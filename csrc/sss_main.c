@@ -470,7 +470,8 @@ static void on_temporary(const char *path, void *user)
  * or a farm's scheduler sends: Ctrl-C, kill, a closed terminal or pipe,
  * an alarm, user signals, and the CPU-time and file-size limits
  * (ulimit -t, ulimit -f) that schedulers set. The faults (SIGSEGV, ...)
- * are not caught. Real-time signals also stop by default: caught too. */
+ * are not caught. Real-time signals also stop by default: caught too.
+ * (Windows has only some of these.) */
 static const struct {
 	int sig;
 	const char *name, *why;
@@ -479,14 +480,30 @@ static const struct {
 	{SIGTERM, "SIGTERM", "terminated"},
 	{SIGHUP, "SIGHUP", "its terminal closed"},
 	{SIGQUIT, "SIGQUIT", "quit"},
+#ifdef SIGPIPE
 	{SIGPIPE, "SIGPIPE", "a closed pipe"},
+#endif
+#ifdef SIGALRM
 	{SIGALRM, "SIGALRM", "an alarm"},
+#endif
+#ifdef SIGUSR1
 	{SIGUSR1, "SIGUSR1", "a user signal"},
+#endif
+#ifdef SIGUSR2
 	{SIGUSR2, "SIGUSR2", "a user signal"},
+#endif
+#ifdef SIGXCPU
 	{SIGXCPU, "SIGXCPU", "its CPU time limit (ulimit -t)"},
+#endif
+#ifdef SIGXFSZ
 	{SIGXFSZ, "SIGXFSZ", "its file size limit (ulimit -f)"},
+#endif
+#ifdef SIGVTALRM
 	{SIGVTALRM, "SIGVTALRM", "a virtual timer"},
+#endif
+#ifdef SIGPROF
 	{SIGPROF, "SIGPROF", "a profiling timer"},
+#endif
 #ifdef SIGPOLL
 	{SIGPOLL, "SIGPOLL", "a pollable event"},
 #endif
@@ -526,7 +543,11 @@ static void on_signal(int sig)
 		put(msg, sizeof msg, &at, pending_temp);
 	}
 	put(msg, sizeof msg, &at, "\n");
-	if (sig != SIGPIPE) /* stderr may be that pipe */
+#ifdef SIGPIPE
+	if (sig == SIGPIPE) /* stderr may be that pipe */
+		at = 0;
+#endif
+	if (at)
 		(void)!write(STDERR_FILENO, msg, at);
 	signal(sig, SIG_DFL);
 	raise(sig);

@@ -7,7 +7,9 @@
 #include "sss_internal.h"
 
 #include <pthread.h>
+#ifdef __linux__
 #include <sched.h>
+#endif
 #include <stdatomic.h>
 #include <unistd.h>
 
@@ -36,12 +38,16 @@ static void *worker(void *arg)
 	}
 }
 
+/* The CPUs this process may run on: its affinity mask where the system
+ * has one (Linux: taskset, a farm's cpuset), else every online CPU. */
 int32_t sss__cpu_count(void)
 {
+#ifdef __linux__
 	cpu_set_t set;
 	CPU_ZERO(&set);
 	if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
 		return CPU_COUNT(&set);
+#endif
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 	return cores > 0 ? (int32_t)(cores < MAX_THREADS ? cores : MAX_THREADS)
 	                 : 1;

@@ -6,6 +6,8 @@ import ctypes
 import importlib.util
 import json
 import os
+import platform
+import sys
 import threading
 
 ABI_VERSION = 9  # must match SSS_ABI_VERSION in csrc/sss.h
@@ -83,22 +85,46 @@ def loaded_path():
     return getattr(_lib, "_name", None) if _lib is not None else None
 
 
+# The library's file name on each system (sys.platform's start).
+LIBRARY_NAMES = (("win32", "libsss.dll"), ("cygwin", "libsss.dll"),
+                 ("darwin", "libsss.dylib"), ("", "libsss.so"))
+
+
+def library_name(system=None):
+    """libsss.so, libsss.dll or libsss.dylib, for this system or the given
+    sys.platform value."""
+    system = sys.platform if system is None else system
+    return next(name for prefix, name in LIBRARY_NAMES
+                if system.startswith(prefix))
+
+
+def platform_name():
+    """This machine as Blender names platforms (linux-x64, windows-x64,
+    macos-arm64, ...), for messages."""
+    system = {"win32": "windows", "darwin": "macos"}.get(sys.platform,
+                                                        sys.platform)
+    machine = platform.machine().lower()
+    arch = {"x86_64": "x64", "amd64": "x64", "aarch64": "arm64",
+            "arm64": "arm64"}.get(machine, machine)
+    return f"{system}-{arch}"
+
+
 def candidates():
     """Where the library may be: $SSS_LIB, the path in the add-on's
     preferences, beside this file (the legacy zip), in the wheel the
     extension installs (package libsss_native), or the checkout's build
-    folder (running from the repository)."""
+    folder (running from the repository); named for this system."""
     env = os.environ.get("SSS_LIB")
     if env:
         yield env
     if _preferred_path:
         yield _preferred_path
-    yield os.path.join(_HERE, "libsss.so")
+    name = library_name()
+    yield os.path.join(_HERE, name)
     spec = importlib.util.find_spec("libsss_native")
     if spec is not None and spec.origin:
-        yield os.path.join(os.path.dirname(spec.origin), "libsss.so")
-    yield os.path.normpath(os.path.join(_HERE, "..", "..", "build",
-                                        "libsss.so"))
+        yield os.path.join(os.path.dirname(spec.origin), name)
+    yield os.path.normpath(os.path.join(_HERE, "..", "..", "build", name))
 
 
 _lib = None
@@ -210,8 +236,11 @@ def library():
                                        "differs from the add-on's")
             _lib = lib
             return lib
-        raise LibraryError(-1, "NOT_FOUND", "libsss not found: " +
-                           "; ".join(tried) + " (run make, or set SSS_LIB)")
+        raise LibraryError(-1, "NOT_FOUND", f"libsss ({library_name()}) for "
+                           f"{platform_name()} not found: " +
+                           "; ".join(tried) + " (install the add-on's zip "
+                           f"for {platform_name()}, run make, or set "
+                           "SSS_LIB)")
 
 
 def version():

@@ -30,9 +30,10 @@ class SSSPreferences(bpy.types.AddonPreferences):
     library_path: StringProperty(
         name="Library", subtype='FILE_PATH', default="",
         update=_library_changed,
-        description="libsss.so to use instead of the one the add-on "
-        "carries (empty: the add-on's own; $SSS_LIB still comes first). "
-        "Takes effect when Blender starts again")
+        description="The library (libsss.so, .dll or .dylib) to use "
+        "instead of the one the add-on carries (empty: the add-on's own; "
+        "$SSS_LIB still comes first). Takes effect when Blender starts "
+        "again")
     output_dir: StringProperty(
         name="Default Output Folder", subtype='DIR_PATH', default="",
         description="Where passes and results go when a scene sets no "
