@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 9
+#define SSS_ABI_VERSION 10
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -330,6 +330,41 @@ typedef struct sss_material {
  * radius (1, 0.2, 0.1) cm-scale for Burley). pass_index is left 0. */
 SSS_API void sss_material_default(sss_material *mat, int32_t kind);
 
+/* The material schema, one entry per key of a scene description's
+ * "materials" entry (docs/scene.md), in the table's order: what it sets,
+ * its default, its range and one line of help. */
+enum sss_field_type {
+	SSS_FIELD_FLOAT = 0, /* float */
+	SSS_FIELD_RGB = 1,   /* float[3] */
+	SSS_FIELD_INT = 2,   /* int32_t in [lo, hi] */
+	SSS_FIELD_ENUM = 3   /* int32_t, one of values[], named names[] */
+};
+
+typedef struct sss_field_info {
+	const char *key;      /* the JSON key */
+	const char *member;   /* the sss_material member it sets */
+	int32_t type;         /* sss_field_type */
+	int32_t profile;      /* the sss_profile_kind reading it, -1 = every */
+	int32_t transmits;    /* 1: read and checked only when transmission
+	                         is not SSS_TRANSMISSION_OFF */
+	double default_value[3]; /* sss_material_default's (one used unless
+	                         SSS_FIELD_RGB); taps: 17 for Jimenez */
+	double lo, hi;        /* the range; hi 1e30: no upper bound */
+	int32_t lo_open;      /* 1: lo itself is excluded */
+	int32_t name_count;   /* SSS_FIELD_ENUM: how many names it has */
+	const char *help;     /* one line */
+} sss_field_info;
+
+/* Fills *info with field i (0, 1, ...); SSS_ERR_INVALID_ARGUMENT past
+ * the last one or when info is NULL. The strings are the library's,
+ * valid as long as it is loaded. */
+SSS_API sss_result sss_material_field(int32_t i, sss_field_info *info);
+
+/* Name j (0 .. name_count - 1) of enum field i and, when value is not
+ * NULL, its value; NULL past the end. */
+SSS_API const char *sss_material_field_name(int32_t i, int32_t j,
+                                            int32_t *value);
+
 /* Checks one material; detail about the first bad field goes to errbuf. */
 SSS_API sss_result sss_material_validate(const sss_material *mat,
                                          char *errbuf, size_t errbuf_len);
@@ -444,6 +479,9 @@ typedef struct sss_options {
 	                            onto the next face, as the walk does;
 	                            0: not (what its measurement compares) */
 } sss_options;
+
+/* sss_options_default's taps, and what a material's taps 0 means. */
+#define SSS_DEFAULT_TAPS 33
 
 SSS_API void sss_options_default(sss_options *opt);
 

@@ -1,6 +1,7 @@
 /* sss_scene.c - the JSON scene description (docs/scene.md): camera, unit
  * scale, options and the material table, checked so that a loaded scene is
  * always accepted by sss_apply. */
+#include "sss_fields.h"
 #include "sss_internal.h"
 
 #include <cJSON.h>
@@ -153,8 +154,8 @@ static void join_index(char *dst, const char *path, int i)
  *
  * Each JSON object is read through one table of its keys: the key, where
  * its value goes in the struct being filled and what it may hold. A new
- * field is one line in its table (plus, for a material, its default and
- * its check in sss_material.c). */
+ * field is one line in its table; a material's is one line of
+ * SSS_MATERIAL_FIELDS (sss_fields.h). */
 
 /* Allowed numbers: [lo, hi], lo excluded when lo_open. */
 typedef struct span {
@@ -179,10 +180,7 @@ enum field_type {
 	FIELD_SPECIAL  /* read by the object's own code */
 };
 
-typedef struct name_value {
-	const char *name;
-	int32_t value;
-} name_value;
+typedef sss__name_value name_value;
 
 typedef struct field {
 	const char *key;
@@ -333,39 +331,11 @@ static const name_value sensor_fits[] = {
 	{"AUTO", SSS_SENSOR_FIT_AUTO}, {"HORIZONTAL", SSS_SENSOR_FIT_HORIZONTAL},
 	{"VERTICAL", SSS_SENSOR_FIT_VERTICAL},
 };
-static const name_value profiles[] = {
-	{"burley", SSS_PROFILE_BURLEY}, {"gaussians", SSS_PROFILE_GAUSSIANS},
-	{"jimenez", SSS_PROFILE_JIMENEZ}, {"near-far", SSS_PROFILE_NEAR_FAR},
-	{"none", SSS_PROFILE_NONE},
-};
-static const name_value mappings[] = {
-	{"cycles", SSS_BURLEY_CYCLES}, {"eevee", SSS_BURLEY_EEVEE},
-	{"random-walk", SSS_BURLEY_RANDOM_WALK},
-	{"cycles-random-walk", SSS_BURLEY_CYCLES_RANDOM_WALK},
-	{"cycles4-random-walk", SSS_BURLEY_CYCLES4_RANDOM_WALK},
-};
-static const name_value calibrations[] = {
-	{"none", SSS_CALIBRATION_NONE},
-	{"cycles-random-walk", SSS_CALIBRATION_CYCLES_RANDOM_WALK},
-	{"cycles4-random-walk-skin", SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN},
-	{"cycles4-random-walk", SSS_CALIBRATION_CYCLES4_RANDOM_WALK},
-};
-static const name_value transmissions[] = {
-	{"off", SSS_TRANSMISSION_OFF}, {"burley", SSS_TRANSMISSION_BURLEY},
-	{"jimenez", SSS_TRANSMISSION_JIMENEZ},
-	{"beer-lambert", SSS_TRANSMISSION_BEER_LAMBERT},
-	{"fast", SSS_TRANSMISSION_FAST},
-};
-static const name_value texturings[] = {
-	{"post", SSS_TEXTURING_POST},
-	{"pre-and-post", SSS_TEXTURING_PRE_AND_POST},
-};
-
 static const char *profile_name(int32_t kind)
 {
-	for (int i = 0; i < COUNT(profiles); i++)
-		if (profiles[i].value == kind)
-			return profiles[i].name;
+	for (int i = 0; i < COUNT(sss__profile_names); i++)
+		if (sss__profile_names[i].value == kind)
+			return sss__profile_names[i].name;
 	return "?";
 }
 
@@ -475,72 +445,29 @@ static sss_result parse_camera(ctx *c, const cJSON *obj, sss_camera *cam)
 
 /* ---------------------------------------------------------- materials */
 
-/* The keys of a "materials" entry. .profile: the profile a key belongs to
- * (-1: every profile reads it); another profile's keys are warned about
- * and ignored. */
-#define MAT(k, p, t, member) .key = k, .profile = p, .type = t, \
-                             .offset = AT(sss_material, member)
-#define ALL (-1)
-#define BURLEY SSS_PROFILE_BURLEY
-#define GAUSS SSS_PROFILE_GAUSSIANS
-#define JIMENEZ SSS_PROFILE_JIMENEZ
-#define NEARFAR SSS_PROFILE_NEAR_FAR
+/* The keys of a "materials" entry: the four read by parse_material
+ * itself, then the schema (sss_fields.h). .profile: the profile a key
+ * belongs to (-1: every profile reads it); another profile's keys are
+ * warned about and ignored. */
+#define ROW(...) ROW_(__VA_ARGS__)
+#define ROW_(k, member, t, p, when, d0, d1, d2, lo_, hi_, lo_open, names_, \
+            count, help) \
+	{.key = k, .profile = SSS__P_##p, .type = FIELD_##t, \
+	 .offset = AT(sss_material, member), .range = {lo_, hi_, lo_open}, \
+	 .lo = (int32_t)((hi_) < 1e9 ? (lo_) : 0), \
+	 .hi = (int32_t)((hi_) < 1e9 ? (hi_) : 0), .what = k, \
+	 .names = names_, .name_count = count},
 static const field material_fields[] = {
-	{.key = "pass_index", .profile = ALL, .type = FIELD_SPECIAL},
-	{.key = "name", .profile = ALL, .type = FIELD_SPECIAL},
-	{.key = "profile", .profile = ALL, .type = FIELD_SPECIAL},
-	{MAT("strength", ALL, FIELD_F32, strength), .range = UNIT},
-	{MAT("texturing", ALL, FIELD_ENUM, texturing),
-	 ENUM(texturings, "texturing")},
-	{MAT("taps", ALL, FIELD_INT, taps), .lo = 0, .hi = 4097},
-	{MAT("radius", BURLEY, FIELD_VEC3, radius), .range = NONNEG_F},
-	{MAT("mapping", BURLEY, FIELD_ENUM, burley_mapping),
-	 ENUM(mappings, "mapping")},
-	{MAT("albedo", BURLEY, FIELD_VEC3, albedo), .range = UNIT},
-	{.key = "gaussians", .profile = GAUSS, .type = FIELD_SPECIAL},
-	{MAT("scale", GAUSS, FIELD_F32, gaussian_scale), .range = NONNEG_F},
-	{MAT("width", JIMENEZ, FIELD_F32, jimenez_width), .range = NONNEG_F},
-	{MAT("strength_rgb", JIMENEZ, FIELD_VEC3, jimenez_strength),
-	 .range = UNIT},
-	{MAT("falloff", JIMENEZ, FIELD_VEC3, jimenez_falloff),
-	 .range = POSITIVE_F},
-	{MAT("scatter_scale", NEARFAR, FIELD_F32, scatter_scale),
-	 .range = NONNEG_F},
-	{MAT("balance", NEARFAR, FIELD_F32, near_far_balance), .range = UNIT},
-	{MAT("near_sigma", NEARFAR, FIELD_VEC3, near_sigma),
-	 .range = POSITIVE_F},
-	{MAT("far_sigma", NEARFAR, FIELD_VEC3, far_sigma), .range = POSITIVE_F},
-	{MAT("transmission", ALL, FIELD_ENUM, transmission),
-	 ENUM(transmissions, "transmission model")},
-	{MAT("transmission_strength", ALL, FIELD_F32, transmission_strength),
-	 .range = UNIT},
-	{MAT("transmission_color", ALL, FIELD_VEC3, transmission_color),
-	 .range = UNIT},
-	{MAT("transmission_distance", ALL, FIELD_F32, transmission_distance),
-	 .range = POSITIVE_F},
-	{MAT("transmission_translucency", ALL, FIELD_F32,
-	     transmission_translucency), .range = UNIT},
-	{MAT("transmission_distortion", ALL, FIELD_F32,
-	     transmission_distortion), .range = UNIT},
-	{MAT("transmission_power", ALL, FIELD_F32, transmission_power),
-	 .range = POSITIVE_F},
-	{MAT("transmission_scale", ALL, FIELD_F32, transmission_scale),
-	 .range = NONNEG_F},
-	{MAT("transmission_ambient", ALL, FIELD_F32, transmission_ambient),
-	 .range = NONNEG_F},
-	{MAT("transmission_baked_scale", ALL, FIELD_F32,
-	     transmission_baked_scale), .range = NONNEG_F},
-	{MAT("thickness_scale", ALL, FIELD_F32, thickness_scale),
-	 .range = NONNEG_F},
-	{MAT("calibration", ALL, FIELD_ENUM, calibration),
-	 ENUM(calibrations, "calibration")},
+	{.key = "pass_index", .profile = -1, .type = FIELD_SPECIAL},
+	{.key = "name", .profile = -1, .type = FIELD_SPECIAL},
+	{.key = "profile", .profile = -1, .type = FIELD_SPECIAL},
+	{.key = "gaussians", .profile = SSS_PROFILE_GAUSSIANS,
+	 .type = FIELD_SPECIAL},
+	SSS_MATERIAL_FIELDS(ROW)
 };
-#undef ALL
-#undef BURLEY
-#undef GAUSS
-#undef JIMENEZ
-#undef NEARFAR
-enum { M_PASS_INDEX, M_NAME, M_PROFILE, M_GAUSSIANS = 9,
+#undef ROW
+#undef ROW_
+enum { M_PASS_INDEX, M_NAME, M_PROFILE, M_GAUSSIANS,
        M_COUNT = COUNT(material_fields) };
 
 static const field gaussian_fields[2] = {
@@ -620,8 +547,8 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	if (!f[M_PROFILE])
 		return FAIL(c, "%s: missing (required: burley, gaussians, jimenez, "
 		            "near-far or none)", p);
-	if ((r = get_enum(c, f[M_PROFILE], p, "profile", profiles,
-	                  COUNT(profiles), &kind)))
+	if ((r = get_enum(c, f[M_PROFILE], p, "profile", sss__profile_names,
+	                  COUNT(sss__profile_names), &kind)))
 		return r;
 	sss_material_default(m, kind);
 

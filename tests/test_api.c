@@ -56,6 +56,24 @@ static void test_material_validation(void)
 		CHECK_STATUS("mat-default", SSS_OK, sss_material_validate(&m, err,
 		                                                        sizeof err));
 	}
+	/* "No upper bound" is 1e30 as a float holds it (1.0000000150e30). */
+	{
+		sss_material big;
+		sss_material_default(&big, SSS_PROFILE_BURLEY);
+		big.pass_index = 1;
+		big.radius[0] = 1e30f;
+		CHECK_STATUS("mat-radius-1e30", SSS_OK,
+		             sss_material_validate(&big, err, sizeof err));
+		big.radius[0] = 2e30f;
+		CHECK_STATUS("mat-radius-2e30", SSS_ERR_INVALID_ARGUMENT,
+		             sss_material_validate(&big, err, sizeof err));
+		sss_material_default(&big, SSS_PROFILE_GAUSSIANS);
+		big.pass_index = 1;
+		big.gaussian_variance[0] = 1e30f;
+		big.gaussian_weight[0][0] = 1e30f;
+		CHECK_STATUS("mat-gaussian-1e30", SSS_OK,
+		             sss_material_validate(&big, err, sizeof err));
+	}
 	sss_material m;
 
 #define BAD(id, kind, stmt, needle)                                          \

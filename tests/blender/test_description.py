@@ -83,3 +83,29 @@ def test_sizes_come_from_the_library(scene):
     assert max(native.transmittance(entry, reach)) <= 0.0101
     assert transmission._len_metres(found, scene) == pytest.approx(reach)
     found.material.sss.transmission = "AUTO"
+
+
+def test_material_properties_follow_the_librarys_schema():
+    """Every material setting that is a field of the library's schema
+    (sss_material_field) has the library's default and stays within its
+    range (1e30: no upper bound), so what an artist can set is what the
+    library accepts."""
+    import numpy as np
+    fields = native.material_fields()
+    rna = properties.SSSMaterialSettings.bl_rna.properties
+    shared = [m for m in fields if m in rna.keys()]
+    assert len(shared) >= 15, shared
+    for member in shared:
+        f, prop = fields[member], rna[member]
+        if f["type"] == "rgb":
+            assert list(prop.default_array) == list(
+                np.float32(f["default"])), member
+        elif f["type"] == "float":
+            assert prop.default == np.float32(f["default"]), member
+        elif f["type"] == "int":
+            assert prop.default == int(f["default"]), member
+        else:
+            continue
+        assert prop.hard_min > f["lo"] if f["lo_open"] else \
+            prop.hard_min >= f["lo"], member
+        assert f["hi"] >= 1e30 or prop.hard_max <= f["hi"], member
