@@ -131,6 +131,28 @@ typedef struct sss_passes {
 	                        fast model's view term; 1 when absent) */
 } sss_passes;
 
+/* The render passes libsss reads (the members of sss_passes above
+ * back_dir), one entry each, in sss_passes order. */
+enum sss_pass_need {
+	SSS_PASS_OPTIONAL = 0, /* used when present */
+	SSS_PASS_REQUIRED = 1, /* always needed */
+	SSS_PASS_CYCLES = 2    /* needed of a Cycles render (an EXR whose
+	                          header Cycles stamped) */
+};
+
+typedef struct sss_pass_info {
+	const char *name;       /* its short name in Blender's EXR: "DiffDir" */
+	const char *components; /* those read, in order: "RGB" */
+	const char *alt;        /* or this single component, or NULL */
+	int32_t need;           /* sss_pass_need */
+	const char *blender;    /* Blender's view layer use_pass_<blender> */
+	const char *hint;       /* under View Layer Properties > Passes */
+} sss_pass_info;
+
+/* Fills *info with pass i (0, 1, ...); SSS_ERR_INVALID_ARGUMENT past the
+ * last one or when info is NULL. The strings are the library's. */
+SSS_API sss_result sss_render_pass(int32_t i, sss_pass_info *info);
+
 /* Names the add-on and sss_process_exr use in Blender's multilayer EXR: the
  * back-light view layer, and its AOVs: SSSThicknessSq (thickness squared,
  * scene units^2: the mean over samples of AO(inside, Distance D) x D^2,

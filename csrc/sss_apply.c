@@ -47,19 +47,15 @@ static sss_result check_output(const char *name, const sss_image *out,
 	sss_result r = sss__check_image(name, out, 3, 1, w, h, errbuf, errbuf_len);
 	if (r)
 		return r;
-	const sss_image *inputs[] = {
-		&p->diff_dir, &p->diff_ind, &p->diff_col, &p->gloss_dir,
-		&p->gloss_ind, &p->gloss_col, &p->trans_dir, &p->trans_ind,
-		&p->trans_col, &p->emit, &p->env, &p->combined, &p->depth,
-		&p->index_ma, &p->position,
-	};
 	const char *olo, *ohi;
 	sss__span(out, &olo, &ohi);
-	for (size_t i = 0; i < sizeof inputs / sizeof *inputs; i++) {
-		if (!inputs[i]->data)
+	for (int32_t i = 0; i < sss__render_pass_count; i++) {
+		const sss_image *in = (const sss_image *)(const void *)(
+			(const char *)p + sss__render_passes[i].offset);
+		if (!in->data)
 			continue;
 		const char *lo, *hi;
-		sss__span(inputs[i], &lo, &hi);
+		sss__span(in, &lo, &hi);
 		if (olo < hi && lo < ohi)
 			return FAILX(SSS_ERR_INVALID_ARGUMENT, "output %s overlaps an "
 			             "input pass; inputs are never overwritten", name);
@@ -517,25 +513,17 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	if ((uint64_t)w * (uint64_t)h > SIZE_MAX / (3 * sizeof(float)) / 2)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "image %dx%d is too large",
 		             w, h);
-	struct {
-		const char *name;
-		const sss_image *im;
-		int32_t channels;
-		int required;
-	} passes[] = {
-		{"DiffInd", &p->diff_ind, 3, 0}, {"DiffCol", &p->diff_col, 3, 1},
-		{"GlossDir", &p->gloss_dir, 3, 0}, {"GlossInd", &p->gloss_ind, 3, 0},
-		{"GlossCol", &p->gloss_col, 3, 0}, {"TransDir", &p->trans_dir, 3, 0},
-		{"TransInd", &p->trans_ind, 3, 0}, {"TransCol", &p->trans_col, 3, 0},
-		{"Emit", &p->emit, 3, 0}, {"Env", &p->env, 3, 0},
-		{"Combined", &p->combined, 4, 0}, {"Depth", &p->depth, 1, 1},
-		{"IndexMA", &p->index_ma, 1, 1}, {"Position", &p->position, 3, 0},
-	};
-	for (size_t i = 0; i < sizeof passes / sizeof *passes; i++)
-		if ((r = sss__check_image(passes[i].name, passes[i].im,
-		                     passes[i].channels, passes[i].required, w, h,
-		                     errbuf, errbuf_len)))
+	/* Every pass of the table (DiffDir again: at its own size). */
+	for (int32_t i = 0; i < sss__render_pass_count; i++) {
+		const sss__pass_row *row = &sss__render_passes[i];
+		if ((r = sss__check_image(
+		         row->name,
+		         (const sss_image *)(const void *)((const char *)p +
+		                                           row->offset),
+		         (int32_t)strlen(row->components),
+		         row->need == SSS_PASS_REQUIRED, w, h, errbuf, errbuf_len)))
 			return r;
+	}
 	if ((r = check_output("combined", out_combined, p, w, h, errbuf,
 	                      errbuf_len)) ||
 	    (r = check_output("diffuse light", out_diffuse_light, p, w, h,

@@ -319,6 +319,18 @@ int sss__zip_inflate(struct libdeflate_decompressor *inflate,
                      const uint8_t *in, size_t in_n, uint8_t *scratch,
                      uint8_t *out, size_t n);
 
+/* One render pass libsss reads (sss_pass_table.h), where it goes in
+ * sss_passes. */
+typedef struct sss__pass_row {
+	const char *name;
+	size_t offset; /* of its sss_image in sss_passes */
+	const char *components, *alt;
+	int32_t need;  /* sss_pass_need */
+	const char *blender, *hint;
+} sss__pass_row;
+extern const sss__pass_row sss__render_passes[];
+extern const int32_t sss__render_pass_count;
+
 /* Checks one pass view against the frame size w x h (sss_apply.c);
  * absent passes (data == NULL) are fine unless required. Errors name the
  * pass. */

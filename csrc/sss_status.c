@@ -118,6 +118,7 @@ size_t sss_struct_size(const char *name)
 		{"sss_process_options", sizeof(sss_process_options)},
 		{"sss_timings", sizeof(sss_timings)},
 		{"sss_field_info", sizeof(sss_field_info)},
+		{"sss_pass_info", sizeof(sss_pass_info)},
 	};
 	if (!name)
 		return 0;

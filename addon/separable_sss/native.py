@@ -71,6 +71,12 @@ class FieldInfo(ctypes.Structure):
                 ("help", ctypes.c_char_p)]
 
 
+class PassInfo(ctypes.Structure):
+    _fields_ = [("name", ctypes.c_char_p), ("components", ctypes.c_char_p),
+                ("alt", ctypes.c_char_p), ("need", ctypes.c_int32),
+                ("blender", ctypes.c_char_p), ("hint", ctypes.c_char_p)]
+
+
 class Timings(ctypes.Structure):
     _fields_ = [("read", ctypes.c_double), ("scatter", ctypes.c_double),
                 ("write", ctypes.c_double)]
@@ -144,6 +150,7 @@ def _declare(lib):
         "sss_transmission_slab": (c.c_int32, [c.c_void_p] +
                                   [c.POINTER(c.c_double)] * 3),
         "sss_method_name": (c.c_char_p, [c.c_int32]),
+        "sss_render_pass": (c.c_int32, [c.c_int32, c.POINTER(PassInfo)]),
         "sss_material_field": (c.c_int32, [c.c_int32,
                                            c.POINTER(FieldInfo)]),
         "sss_material_field_name": (c.c_char_p, [c.c_int32, c.c_int32,
@@ -249,6 +256,27 @@ def methods():
         i = len(out)
         out.append((lib.sss_method_name(i).decode(),
                     lib.sss_method_summary(i).decode()))
+    return out
+
+
+PASS_NEEDS = ("optional", "required", "cycles")  # sss_pass_need's order
+
+
+def render_passes():
+    """[dict] of the render passes the library reads (sss_render_pass):
+    name (in the EXR), components, need (PASS_NEEDS), blender (the view
+    layer's use_pass_<blender>) and hint (where it is in Blender)."""
+    lib = library()
+    if lib.sss_struct_size(b"sss_pass_info") != ctypes.sizeof(PassInfo):
+        raise LibraryError(-1, "ABI", "sss_pass_info layout differs from "
+                           "the add-on's")
+    out, info = [], PassInfo()
+    while lib.sss_render_pass(len(out), ctypes.byref(info)) == 0:
+        out.append({"name": info.name.decode(),
+                    "components": info.components.decode(),
+                    "need": PASS_NEEDS[info.need],
+                    "blender": info.blender.decode(),
+                    "hint": info.hint.decode()})
     return out
 
 

@@ -13,8 +13,8 @@ from bpy.app.handlers import persistent
 from bpy.props import BoolProperty
 
 from . import blender_compat as compat
-from . import live, nodes, pipeline, render_flow
-from .switch_off import REQUIRED_PASSES, pass_indices
+from . import live, native, nodes, pipeline, render_flow
+from .switch_off import pass_indices, required_passes
 
 # Only one run at a time: its worker thread, alive while the library runs
 # (also after an Esc, until the library returns).
@@ -76,8 +76,12 @@ def _missing_passes(layer):
     not render (Render with SSS turns them on for its own render)."""
     if layer is None:
         return []
+    try:
+        needed = required_passes()
+    except native.LibraryError:
+        return []  # the run itself says what is wrong with the library
     return [layer.bl_rna.properties["use_pass_" + p].name
-            for p in REQUIRED_PASSES if not getattr(layer, "use_pass_" + p)]
+            for p in needed if not getattr(layer, "use_pass_" + p)]
 
 
 # Per scene name, what its last render lacked (the Render Result keeps no

@@ -16,15 +16,21 @@ from contextlib import contextmanager
 import bpy
 
 from . import blender_compat as compat
-from . import transmission
+from . import native, transmission
 from .blender_compat import principled_input
 
-# What the library cannot do without (Apply SSS to Last Render checks that
-# a render had them), then what every render with SSS also asks for.
-REQUIRED_PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
-                   "z", "material_index")
-PASSES = REQUIRED_PASSES + ("glossy_direct", "glossy_indirect",
-                            "glossy_color")
+
+def required_passes():
+    """Blender's names (use_pass_<name>) of the passes the library needs
+    of a Cycles render, from its own table (sss_render_pass): Apply SSS to
+    Last Render checks that a render had them."""
+    return tuple(p["blender"] for p in native.render_passes()
+                 if p["need"] != "optional")
+
+
+# What every render with SSS also asks for: with the required ones,
+# whatever the scene holds; then the optional ones, as the scene needs.
+GLOSSY_PASSES = ("glossy_direct", "glossy_indirect", "glossy_color")
 OPTIONAL_PASSES = {"emit": "emits", "environment": None,
                    "transmission_direct": "transmits",
                    "transmission_indirect": "transmits",
@@ -178,7 +184,7 @@ def _free_pass_indices(scene, analysis, undo):
 
 def _enable_passes(scene, analysis, undo):
     for layer in scene.view_layers:
-        for name in PASSES:
+        for name in required_passes() + GLOSSY_PASSES:
             undo.set(layer, "use_pass_" + name, True)
         for name, needs in OPTIONAL_PASSES.items():
             if hasattr(layer, "use_pass_" + name) and (

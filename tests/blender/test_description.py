@@ -109,3 +109,22 @@ def test_material_properties_follow_the_librarys_schema():
         assert prop.hard_min > f["lo"] if f["lo_open"] else \
             prop.hard_min >= f["lo"], member
         assert f["hi"] >= 1e30 or prop.hard_max <= f["hi"], member
+
+
+def test_required_passes_are_the_librarys(scene):
+    """The passes the add-on turns on and checks for are the library's
+    table (sss_render_pass), named as Blender's view layer names them."""
+    from separable_sss import switch_off
+    table = native.render_passes()
+    assert [p["name"] for p in table][:3] == ["DiffDir", "DiffInd",
+                                              "DiffCol"]
+    layer = scene.view_layers[0]
+    for p in table:
+        if p["blender"] != "combined":   # always rendered, no switch
+            assert hasattr(layer, "use_pass_" + p["blender"]), p
+    required = switch_off.required_passes()
+    assert set(required) == {"diffuse_direct", "diffuse_indirect",
+                             "diffuse_color", "z", "material_index"}
+    with pipeline.switched_off(scene, analysis.analyse(scene),
+                               backlight=False):
+        assert all(getattr(layer, "use_pass_" + p) for p in required)
