@@ -530,7 +530,7 @@ SSS_API sss_result sss_apply(const sss_passes *passes, const sss_camera *cam,
 
 
 /* ------------------------------------------------------------ EXR files
- * (sss_exr.c, through the OpenEXR C API). An sss_exr holds one image part
+ * (sss_exr*.c, through the OpenEXR C API). An sss_exr holds one image part
  * decoded to float, grouped into passes: channel "ViewLayer.DiffDir.R"
  * is component R of pass "DiffDir" in layer "ViewLayer" (render output
  * naming); "DiffDir.R" has layer "" (File Output node naming); a channel

@@ -77,7 +77,7 @@ extern const float sss__deon_weight[6][3];
  * ceiling. */
 sss_result sss__frame_check_result(const sss_frame *frame, char *err,
                                    size_t errlen);
-/* Removes every pass of a layer from an EXR image (sss_exr.c). */
+/* Removes every pass of a layer from an EXR image (sss_exr.c, the model). */
 void sss__exr_remove_layer(sss_exr *exr, const char *layer);
 
 /* errbuf helper: formats into errbuf when given, returns code. */

@@ -1,7 +1,7 @@
 /* sss_render_passes.c - Blender's render passes in a multilayer EXR: which
  * view layer holds the render, which of its passes libsss reads and what
  * to tell the artist when one is missing. Works on the sss_exr public API
- * (sss_exr.c does the file format); sss_process.c runs it per frame. */
+ * (sss_exr*.c do the file format); sss_process.c runs it per frame. */
 #include "sss_internal.h"
 
 #include <stdarg.h>
