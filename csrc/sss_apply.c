@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 /* Indexed by sss_method: the one place the methods are named. */
 static const struct {

@@ -370,7 +370,7 @@ sss_result sss__exr_group_channels(sss_exr *exr, int32_t max_channels,
 		exr_result_t rv = exr_get_channels(exr->header, part, &cl);
 		if (rv != EXR_ERR_SUCCESS)
 			return sss__exr_fail(errbuf, errbuf_len, exr->path, "reading the "
-			                "channel list", rv, &exr->io);
+			                     "channel list", rv, &exr->io);
 		/* Decoding counts a part's channels in 16 bits too. */
 		if (cl->num_channels > sss__exr_max_channels())
 			return FAILX(SSS_ERR_UNSUPPORTED, "%s: part %d has %d "

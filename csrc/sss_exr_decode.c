@@ -278,8 +278,8 @@ static sss_result check_storage(sss_exr *exr, int part, char *errbuf,
 	exr_storage_t storage;
 	exr_result_t rv = exr_get_storage(exr->header, part, &storage);
 	if (rv != EXR_ERR_SUCCESS)
-		return sss__exr_fail(errbuf, errbuf_len, exr->path, "reading the header",
-		                rv, &exr->io);
+		return sss__exr_fail(errbuf, errbuf_len, exr->path,
+		                     "reading the header", rv, &exr->io);
 	if (storage == EXR_STORAGE_DEEP_SCANLINE ||
 	    storage == EXR_STORAGE_DEEP_TILED)
 		return FAILX(SSS_ERR_UNSUPPORTED, "%s: deep image data is not "
@@ -303,7 +303,7 @@ static sss_result read_header(sss_exr *exr, const sss_exr_options *o,
 		rv = EXR_ERR_FILE_BAD_HEADER;
 	if (rv != EXR_ERR_SUCCESS)
 		return sss__exr_fail(errbuf, errbuf_len, path, "reading the header", rv,
-		                &exr->io);
+		                     &exr->io);
 	exr->part_count = parts;
 	sss_result r;
 	exr_attr_box2i_t dw;
@@ -313,7 +313,7 @@ static sss_result read_header(sss_exr *exr, const sss_exr_options *o,
 			return r;
 		if ((rv = exr_get_data_window(c, part, &pw)) != EXR_ERR_SUCCESS)
 			return sss__exr_fail(errbuf, errbuf_len, path, "reading the data "
-			                "window", rv, &exr->io);
+			                     "window", rv, &exr->io);
 		if (part == 0) {
 			dw = pw;
 		} else if (memcmp(&pw, &dw, sizeof dw) != 0) {
@@ -401,7 +401,7 @@ static sss_result decode_part(sss_exr *exr, const sss_exr_options *o,
 	}
 	if (rv != EXR_ERR_SUCCESS)
 		return sss__exr_fail(errbuf, errbuf_len, path, "reading the chunk "
-		                "layout", rv, &exr->io);
+		                     "layout", rv, &exr->io);
 
 	/* The first chunk on this thread loads the chunk offset table once;
 	 * then the rest in parallel, one pipeline per band of chunks. */
@@ -514,7 +514,7 @@ static sss_result decode_image(sss_exr *exr, const sss_exr_options *o,
 		exr_result_t rv = exr_get_channels(exr->header, part, &cl);
 		if (rv != EXR_ERR_SUCCESS)
 			r = sss__exr_fail(errbuf, errbuf_len, path, "reading the channel "
-			             "list", rv, &exr->io);
+			                  "list", rv, &exr->io);
 		else if (cl->num_channels > 0)
 			r = decode_part(exr, o, part, ref + first, errbuf, errbuf_len);
 		if (!r)
@@ -590,10 +590,10 @@ sss_result sss_exr_read(const char *path, const sss_exr_options *opt,
 			          path);
 		else
 			r = sss__exr_fail(errbuf, errbuf_len, path, "not a readable "
-			             "OpenEXR file", rv, &exr->io);
+			                  "OpenEXR file", rv, &exr->io);
 	} else if (!(r = read_header(exr, &o, errbuf, errbuf_len)) &&
 	           !(r = sss__exr_group_channels(exr, o.max_channels, errbuf,
-	                                errbuf_len))) {
+	                                         errbuf_len))) {
 		r = decode_image(exr, &o, errbuf, errbuf_len);
 	}
 	/* The header stays in memory for sss_exr_write; the file is done. */

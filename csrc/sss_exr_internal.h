@@ -13,7 +13,6 @@
 #include <pthread.h>
 #include <sys/types.h>
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 /* EXR allows 255-byte names once long names are switched on. */
 #define MAX_NAME 255

@@ -68,7 +68,8 @@ sss_result sss_exr_check_output(const char *path, char *errbuf,
 		const char *slash = strrchr(path, '/');
 		if (!slash)
 			return SSS_OK;
-		char *dir = sss__exr_dup_n(path, slash == path ? 1 : (size_t)(slash - path));
+		size_t dir_len = slash == path ? 1 : (size_t)(slash - path);
+		char *dir = sss__exr_dup_n(path, dir_len);
 		if (!dir)
 			return FAILX(SSS_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
 		int bad = stat(dir, &st) != 0 ? errno

@@ -29,7 +29,6 @@ sss_result sss_render_pass(int32_t i, sss_pass_info *info)
 	return SSS_OK;
 }
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 sss_result sss__check_image(const char *name, const sss_image *im,
                             int32_t min_channels, int required, int32_t w,

@@ -85,6 +85,12 @@ sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
                      const char *fmt, ...)
 	__attribute__((format(printf, 4, 5)));
 
+/* In a function with errbuf and errbuf_len, the one way to fail: FAIL
+ * with SSS_ERR_INVALID_ARGUMENT, FAILX with another status. */
+#define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
+                            __VA_ARGS__)
+#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
+
 /* Profiles (sss_profile.c). A support beyond max_support (scene units;
  * 0 = no limit) is shrunk to it, profile lengths with it: see
  * sss__reach_limit. */

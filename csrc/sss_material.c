@@ -109,8 +109,6 @@ const char *sss_material_field_name(int32_t i, int32_t j, int32_t *value)
 	return fields[i].names[j].name;
 }
 
-#define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
-                            __VA_ARGS__)
 
 /* Compared as floats, as the field holds them: 1e30 read into a float
  * is 1.0000000150e30, which is still "at most 1e30". */

@@ -8,7 +8,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 /* Appends printf output to a fixed buffer, truncating quietly. */
 static void append(char *buf, size_t cap, const char *fmt, ...)

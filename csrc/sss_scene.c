@@ -42,8 +42,10 @@ typedef struct ctx {
 	int warn_full;    /* truncated: later warnings are dropped */
 } ctx;
 
-#define FAIL(c, ...) sss__fail((c)->err, (c)->err_len, \
-                               SSS_ERR_INVALID_ARGUMENT, __VA_ARGS__)
+/* The reader's failure: SSS_ERR_INVALID_ARGUMENT into the context's
+ * errbuf (FAIL and FAILX, sss_internal.h, take a function's own). */
+#define PARSE_FAIL(c, ...) sss__fail((c)->err, (c)->err_len, \
+                                     SSS_ERR_INVALID_ARGUMENT, __VA_ARGS__)
 
 /* Appends one line to warnbuf; when it no longer fits, what fits is kept
  * and the buffer ends in "..." so that the cut is visible. */
@@ -121,8 +123,8 @@ static sss_result type_error(ctx *c, const char *path, const char *expected,
                              const cJSON *it)
 {
 	char buf[32];
-	return FAIL(c, "%s: expected %s, got %s", path, expected,
-	            describe(it, buf, sizeof buf));
+	return PARSE_FAIL(c, "%s: expected %s, got %s", path, expected,
+	                  describe(it, buf, sizeof buf));
 }
 
 /* dst = a b c, cut to PATH_LEN - 1 bytes (known key paths are short). */
@@ -216,7 +218,7 @@ static sss_result scan(ctx *c, const cJSON *obj, const char *path,
 		} else if (found[k]) {
 			char p[PATH_LEN];
 			join(p, path, fields[k].key);
-			return FAIL(c, "%s: key given twice", p);
+			return PARSE_FAIL(c, "%s: key given twice", p);
 		} else {
 			found[k] = it;
 		}
@@ -233,17 +235,19 @@ static sss_result get_f64(ctx *c, const cJSON *it, const char *path,
 		return type_error(c, path, "a number", it);
 	double v = it->valuedouble;
 	if (!isfinite(v)) /* JSON has no NaN; 1e999 overflows to Inf */
-		return FAIL(c, "%s: number out of range (overflows a double)", path);
+		return PARSE_FAIL(c, "%s: number out of range (overflows a double)",
+		                  path);
 	if (v < s.lo || (s.lo_open && v <= s.lo) || v > s.hi) {
 		/* 1e30 and up is "no upper bound" unless it is what was hit. */
 		if (s.hi < 1e30)
-			return FAIL(c, "%s: %g is out of range (must be in %c%g, %g])",
-			            path, v, s.lo_open ? '(' : '[', s.lo, s.hi);
+			return PARSE_FAIL(c, "%s: %g is out of range (must be in "
+			                  "%c%g, %g])", path, v, s.lo_open ? '(' : '[',
+			                  s.lo, s.hi);
 		if (v > s.hi)
-			return FAIL(c, "%s: %g is out of range (must be <= %g)", path,
-			            v, s.hi);
-		return FAIL(c, "%s: %g is out of range (must be %s %g)", path, v,
-		            s.lo_open ? ">" : ">=", s.lo);
+			return PARSE_FAIL(c, "%s: %g is out of range (must be <= %g)", path,
+			                  v, s.hi);
+		return PARSE_FAIL(c, "%s: %g is out of range (must be %s %g)", path, v,
+		                  s.lo_open ? ">" : ">=", s.lo);
 	}
 	*out = v;
 	return SSS_OK;
@@ -257,11 +261,11 @@ static sss_result get_f32(ctx *c, const cJSON *it, const char *path,
 	if (r)
 		return r;
 	if (fabs(v) > FLT_MAX)
-		return FAIL(c, "%s: %g is too large for a 32-bit float", path, v);
+		return PARSE_FAIL(c, "%s: %g is too large for a 32-bit float", path, v);
 	float f = (float)v;
 	if (s.lo_open && !(f > s.lo))
-		return FAIL(c, "%s: %g is too small (it rounds to %g as a 32-bit "
-		            "float)", path, v, (double)f);
+		return PARSE_FAIL(c, "%s: %g is too small (it rounds to %g as a 32-bit "
+		                  "float)", path, v, (double)f);
 	*out = f;
 	return SSS_OK;
 }
@@ -273,13 +277,13 @@ static sss_result get_int(ctx *c, const cJSON *it, const char *path,
 		return type_error(c, path, "an integer", it);
 	double v = it->valuedouble;
 	if (!isfinite(v) || v != floor(v))
-		return FAIL(c, "%s: expected an integer, got %g", path, v);
+		return PARSE_FAIL(c, "%s: expected an integer, got %g", path, v);
 	if (v < lo || v > hi) {
 		if (hi == INT32_MAX && v < lo)
-			return FAIL(c, "%s: %g is out of range (must be >= %d)", path,
-			            v, lo);
-		return FAIL(c, "%s: %g is out of range (must be %d..%d)", path, v,
-		            lo, hi);
+			return PARSE_FAIL(c, "%s: %g is out of range (must be >= %d)", path,
+			                  v, lo);
+		return PARSE_FAIL(c, "%s: %g is out of range (must be %d..%d)", path, v,
+		                  lo, hi);
 	}
 	*out = (int32_t)v;
 	return SSS_OK;
@@ -320,8 +324,8 @@ static sss_result get_enum(ctx *c, const cJSON *it, const char *path,
 		snprintf(list + used, sizeof list - used, "%s%s", i ? ", " : "",
 		         tab[i].name);
 	}
-	return FAIL(c, "%s: unknown %s '%s' (expected %s)", path, what,
-	            printable(it->valuestring, buf, sizeof buf), list);
+	return PARSE_FAIL(c, "%s: unknown %s '%s' (expected %s)", path, what,
+	                  printable(it->valuestring, buf, sizeof buf), list);
 }
 
 static const name_value camera_types[] = {
@@ -438,8 +442,8 @@ static sss_result parse_camera(ctx *c, const cJSON *obj, sss_camera *cam)
 	                                  (span)POSITIVE, &clip_end)))
 		return r;
 	if (f[C_CLIP_START] && f[C_CLIP_END] && !(clip_end > clip_start))
-		return FAIL(c, "camera.clip_end: %g must be greater than "
-		            "camera.clip_start (%g)", clip_end, clip_start);
+		return PARSE_FAIL(c, "camera.clip_end: %g must be greater than "
+		                  "camera.clip_start (%g)", clip_end, clip_start);
 	return SSS_OK;
 }
 
@@ -481,9 +485,9 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 	int n = cJSON_IsArray(arr) ? cJSON_GetArraySize(arr) : -1;
 	if (n < 1 || n > SSS_MAX_GAUSSIANS) {
 		char buf[32];
-		return FAIL(c, "%s: expected an array of 1 to %d objects "
-		            "{\"variance\", \"weight\"}, got %s", path,
-		            SSS_MAX_GAUSSIANS, describe(arr, buf, sizeof buf));
+		return PARSE_FAIL(c, "%s: expected an array of 1 to %d objects "
+		                  "{\"variance\", \"weight\"}, got %s", path,
+		                  SSS_MAX_GAUSSIANS, describe(arr, buf, sizeof buf));
 	}
 	/* Rows beyond the given ones are cleared, not left at the default
 	 * skin's values, so the struct shows exactly what the file says. */
@@ -503,7 +507,7 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 		for (int k = 0; k < 2; k++) {
 			join(p, gp, gaussian_fields[k].key);
 			if (!f[k])
-				return FAIL(c, "%s: missing (required)", p);
+				return PARSE_FAIL(c, "%s: missing (required)", p);
 			r = k == 0 ? get_f32(c, f[k], p, (span)POSITIVE_F,
 			                     &m->gaussian_variance[i])
 			           : get_vec3(c, f[k], p, (span)NONNEG_F,
@@ -520,8 +524,9 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 		for (int k = 0; k < n; k++)
 			sum += m->gaussian_weight[k][ch];
 		if (!(sum > 0.0))
-			return FAIL(c, "%s: the weights of channel %c sum to 0 (every "
-			            "channel needs some weight)", path, rgb[ch]);
+			return PARSE_FAIL(c, "%s: the weights of channel %c sum to 0 "
+			                  "(every channel needs some weight)", path,
+			                  rgb[ch]);
 	}
 	return SSS_OK;
 }
@@ -545,8 +550,8 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	int32_t kind = SSS_PROFILE_NONE;
 	join(p, mp, "profile");
 	if (!f[M_PROFILE])
-		return FAIL(c, "%s: missing (required: burley, gaussians, jimenez, "
-		            "near-far or none)", p);
+		return PARSE_FAIL(c, "%s: missing (required: burley, gaussians, "
+		                  "jimenez, near-far or none)", p);
 	if ((r = get_enum(c, f[M_PROFILE], p, "profile", sss__profile_names,
 	                  COUNT(sss__profile_names), &kind)))
 		return r;
@@ -554,7 +559,7 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 
 	join(p, mp, "pass_index");
 	if (!f[M_PASS_INDEX])
-		return FAIL(c, "%s: missing (required, 1..65535)", p);
+		return PARSE_FAIL(c, "%s: missing (required, 1..65535)", p);
 	if ((r = get_int(c, f[M_PASS_INDEX], p, 1, 65535, &m->pass_index)))
 		return r;
 	int32_t pi = m->pass_index;
@@ -562,8 +567,8 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 		int32_t j = 0;
 		while (j < i && earlier[j].pass_index != pi)
 			j++;
-		return FAIL(c, "%s: %d is already used by materials[%d]", p, pi,
-		            (int)j);
+		return PARSE_FAIL(c, "%s: %d is already used by materials[%d]", p, pi,
+		                  (int)j);
 	}
 	used[pi >> 3] |= (uint8_t)(1u << (pi & 7));
 
@@ -593,7 +598,7 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	 * always one sss_apply accepts. */
 	char msg[200];
 	if (sss_material_validate(m, msg, sizeof msg))
-		return FAIL(c, "%s: %s", mp, msg);
+		return PARSE_FAIL(c, "%s: %s", mp, msg);
 
 	/* Allocated last, so that no error path has to free it. */
 	char fallback[32];
@@ -613,8 +618,8 @@ static sss_result parse_materials(ctx *c, const cJSON *arr, sss_scene *sc)
 		return type_error(c, "materials", "an array of objects", arr);
 	int n = cJSON_GetArraySize(arr);
 	if (n > SCENE_MAX_MATERIALS)
-		return FAIL(c, "materials: %d entries, at most %d", n,
-		            SCENE_MAX_MATERIALS);
+		return PARSE_FAIL(c, "materials: %d entries, at most %d", n,
+		                  SCENE_MAX_MATERIALS);
 	sc->materials = calloc(n ? (size_t)n : 1, sizeof *sc->materials);
 	sc->names = calloc(n ? (size_t)n : 1, sizeof *sc->names);
 	uint8_t *used = calloc(65536 / 8, 1);
@@ -665,8 +670,8 @@ static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 {
 	if (!cJSON_IsObject(root)) {
 		char buf[32];
-		return FAIL(c, "expected a JSON object at the top level, got %s",
-		            describe(root, buf, sizeof buf));
+		return PARSE_FAIL(c, "expected a JSON object at the top level, got %s",
+		                  describe(root, buf, sizeof buf));
 	}
 	const cJSON *f[T_COUNT];
 	sss_result r = scan(c, root, "", top_fields, T_COUNT, f);
@@ -718,8 +723,8 @@ static sss_result syntax_error(ctx *c, const char *text, const char *at,
 		}
 	}
 	if (!*at)
-		return FAIL(c, "%s at line %d, column %d (at the end of the text)",
-		            what, line, col);
+		return PARSE_FAIL(c, "%s at line %d, column %d (at the end of the "
+		                  "text)", what, line, col);
 	char near[24], buf[48];
 	size_t n = 0;
 	while (at[n] && at[n] != '\n' && at[n] != '\r' && n + 1 < sizeof near) {
@@ -727,8 +732,8 @@ static sss_result syntax_error(ctx *c, const char *text, const char *at,
 		n++;
 	}
 	near[n] = '\0';
-	return FAIL(c, "%s at line %d, column %d (near '%s')", what, line, col,
-	            printable(near, buf, sizeof buf));
+	return PARSE_FAIL(c, "%s at line %d, column %d (near '%s')", what, line,
+	                  col, printable(near, buf, sizeof buf));
 }
 
 /* Values (numbers, strings, literals, arrays, objects; keys count as
@@ -773,9 +778,9 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 	if (out)
 		*out = NULL;
 	if (!out)
-		return FAIL(&c, "out is NULL");
+		return PARSE_FAIL(&c, "out is NULL");
 	if (!json && json_len)
-		return FAIL(&c, "JSON text is NULL");
+		return PARSE_FAIL(&c, "JSON text is NULL");
 
 	/* The text ends at json_len or at a NUL byte, whichever is first. A
 	 * terminated copy keeps cJSON off the end of a caller's buffer. */
@@ -792,7 +797,7 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 	cJSON *root = NULL;
 	sss_scene *sc = NULL;
 	if (!*skip_space(text)) {
-		r = FAIL(&c, "empty JSON text");
+		r = PARSE_FAIL(&c, "empty JSON text");
 		goto done;
 	}
 	/* Before cJSON sees it: a "\u0000" in a string would end that
@@ -807,8 +812,8 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 		goto done;
 	}
 	if (values > SCENE_MAX_VALUES) {
-		r = FAIL(&c, "more than %d JSON values (%lld); a scene "
-		         "description holds far fewer", SCENE_MAX_VALUES, values);
+		r = PARSE_FAIL(&c, "more than %d JSON values (%lld); a scene "
+		               "description holds far fewer", SCENE_MAX_VALUES, values);
 		goto done;
 	}
 	/* The end pointer, not cJSON_GetErrorPtr(): that one is global. */

@@ -75,12 +75,21 @@ def paths_for(scene, frame):
 
 # ----------------------------------------------------------------- render
 
-def _check_scene(scene):
+def scene_problem(scene):
+    """Why the scene cannot be rendered with SSS, as one sentence, or None:
+    what the operators' poll, the sidebar and every run say."""
     if scene.camera is None:
-        raise SSSError("the scene has no camera")
+        return "The scene has no camera"
     if scene.render.engine != "CYCLES":
-        raise SSSError(f"{scene.render.engine.title()} renders have no "
-                       "Material Index pass; render with Cycles")
+        return (f"{scene.render.engine.title()} renders have no Material "
+                "Index pass: switch the render engine to Cycles")
+    return None
+
+
+def _check_scene(scene):
+    problem = scene_problem(scene)
+    if problem:
+        raise SSSError(problem[0].lower() + problem[1:])
 
 
 def save_passes(scene, path):
@@ -130,7 +139,7 @@ def prepare_render(context):
             raise SSSError("the render was cancelled; nothing was changed")
         save_passes(scene, inp)
         write_description(scene, found, desc)
-    summary = f"{len(found.found)} scattering material(s)"
+    summary = f"{len(found.materials)} scattering material(s)"
     if transmission.transmitting(found):
         need, why = transmission.wanted(scene, found)
         summary += f"; back-light layer {'on' if need else 'off'}, {why}"
@@ -151,7 +160,7 @@ def prepare_last_render(context):
         write_description(scene, found, desc)
     save_passes(scene, inp)
     return Job(inp, out, desc, context.view_layer.name,
-               summary=f"{len(found.found)} scattering material(s)")
+               summary=f"{len(found.materials)} scattering material(s)")
 
 
 def scatter(job, progress=None):

@@ -155,7 +155,7 @@ class Flow:
             n.frame_start, n.frame_offset, n.frame_duration = o[2:]
         self.tree_undo.add(restore)
         node.image = self.images[layer]
-        node.layer = "SSS"
+        node.layer = nodes.RESULT_LAYER
         self._follow_frames(node)
 
     def _result_nodes(self, node):
@@ -169,7 +169,7 @@ class Flow:
             image.source = 'SEQUENCE'
             self.images[node.layer] = image
         made = []
-        for dy, layer in ((0, "SSS"), (-260, node.layer)):
+        for dy, layer in ((0, nodes.RESULT_LAYER), (-260, node.layer)):
             im = tree.nodes.new("CompositorNodeImage")
             undo.add(lambda im=im: tree.nodes.remove(im))
             im.label = TAG
@@ -303,17 +303,18 @@ class Flow:
             # A view layer already named SSS-NAME would be replaced by
             # NAME's result: refused, as the library refuses one named SSS.
             taken = {layer for layer, *_ in out.passes()}
+            result = nodes.RESULT_LAYER
             for layer in self.layers[1:]:
-                if "SSS-" + layer in taken:
+                if f"{result}-{layer}" in taken:
                     raise pipeline.SSSError(
-                        f"frame {frame}: view layer 'SSS-{layer}' has the "
-                        f"name of view layer '{layer}''s SSS result, which "
-                        "would replace it; rename it")
+                        f"frame {frame}: view layer '{result}-{layer}' has "
+                        f"the name of view layer '{layer}''s SSS result, "
+                        "which would replace it; rename it")
             out.copy_layer(written, "Composite")
             for layer in self.layers[1:]:
                 with native.Exr(self.result_path(layer, frame)) as other:
                     out.copy_layer(other, layer)
-                    out.copy_layer(other, "SSS", "SSS-" + layer)
+                    out.copy_layer(other, result, f"{result}-{layer}")
             out.write(path)
 
     def blank(self):
@@ -449,7 +450,7 @@ def on_init(scene, *_):
              "the add-on's key binding, Render with SSS or blender -b")
         return
     last_error = None
-    if not pipeline.analyse(scene).found:
+    if not pipeline.analyse(scene).materials:
         _say(scene, "no material scatters; the render is left alone")
         return
     try:

@@ -149,12 +149,12 @@ def pass_indices(analysis):
     Pass Indices operator. Another material's index is off limits, a
     non-scattering one's too: its pixels would scatter with this
     profile."""
-    scattering = {f.material for f in analysis.found}
+    scattering = {f.material for f in analysis.materials}
     taken = {m.pass_index for m in bpy.data.materials
              if m not in scattering and m.pass_index}
     next_index = max(taken | {m.pass_index for m in scattering} | {0}) + 1
     used, out = set(), {}
-    for found in analysis.found:
+    for found in analysis.materials:
         mat = found.material
         if mat in out:
             continue
@@ -171,7 +171,7 @@ def assign_pass_indices(analysis):
     """Sets every found material's pass index in the analysis (not on the
     material) by pass_indices(); returns the mapping."""
     indices = pass_indices(analysis)
-    for found in analysis.found:
+    for found in analysis.materials:
         found.pass_index = indices[found.material]
     return indices
 
@@ -205,7 +205,7 @@ def switched_off(scene, analysis, backlight=True):
         _enable_passes(scene, analysis, undo)
         if backlight:
             transmission.add_layer(scene, analysis, undo)
-        for found in analysis.found:
+        for found in analysis.materials:
             tree = found.material.node_tree
             if found.node.type == "BSDF_PRINCIPLED":
                 _switch_principled(tree, found.node, undo)

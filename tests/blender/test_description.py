@@ -56,7 +56,7 @@ def test_every_method_choice_reaches_the_library(scene, tmp_path):
 
 def test_description_is_read_without_warnings(scene, tmp_path):
     found = analysis.analyse(scene)
-    assert len(found.found) == 2
+    assert len(found.materials) == 2
     scene.sss.radius_scale = 1.5
     path = str(tmp_path / "scene.json")
     write(scene, found, path)
@@ -68,7 +68,7 @@ def test_description_is_read_without_warnings(scene, tmp_path):
 
 
 def test_sizes_come_from_the_library(scene):
-    found = analysis.analyse(scene).found[0]
+    found = analysis.analyse(scene).materials[0]
     entry = description.library_material(scene, found)
     scene.sss.radius_scale = 2.0
     assert pipeline.support_metres(scene, found) == pytest.approx(

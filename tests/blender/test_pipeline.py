@@ -249,7 +249,7 @@ def test_description_follows_the_method(blends, tmp_path, method):
 
 def test_no_scattering_material(blends, tmp_path):
     scene = open_scene(blends["none"], tmp_path)
-    assert pipeline.analyse(scene).found == []
+    assert pipeline.analyse(scene).materials == []
 
 
 def test_render_sss_script(blends, tmp_path):
@@ -278,7 +278,7 @@ def test_non_scattering_material_index_is_off_limits(blends, tmp_path):
     scatter with this profile), as Assign Pass Indices does; the material
     keeps its own index after the render."""
     scene = open_scene(blends["two"], tmp_path)
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     mat = found[0].material
     mat.pass_index = 7
     plain = bpy.data.materials.new("Plain")

@@ -191,12 +191,12 @@ def test_auto_is_profile_for_random_walk(slab, tmp_path):
     scene = open_scene(slab, tmp_path)
     mat = bpy.data.materials["Skin"]
     mat.sss.transmission = "AUTO"
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     assert [transmission.model(f) for f in found] == ["BURLEY"]
     assert transmission.wanted(scene, pipeline.analyse(scene))[0]
     node = mat.node_tree.nodes["Principled BSDF"]
     node.subsurface_method = "BURLEY"
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     assert [transmission.model(f) for f in found] == ["OFF"]
     assert not transmission.wanted(scene, pipeline.analyse(scene))[0]
 
