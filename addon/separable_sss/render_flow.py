@@ -250,9 +250,6 @@ class Flow:
                  f"{'on' if need else 'off'}, {why}")
         desc = os.path.join(self.folder, f"scene_{frame:04d}.json")
         with switched_off(copy, found):
-            if os.environ.get("SSS_TEST_FAIL") == "pass":
-                for layer in copy.view_layers:  # a real missing pass
-                    layer.use_pass_diffuse_color = False
             pipeline.write_description(scene, found, desc)
             copy.render.filepath = self.passes_path(frame)
             status = bpy.ops.render.render(write_still=True,

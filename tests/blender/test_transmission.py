@@ -13,6 +13,8 @@ from helpers import BUILD, build_blend, diff, load_addon, snapshot
 separable_sss = load_addon()
 from separable_sss import pipeline, transmission  # noqa: E402
 
+import faults  # noqa: E402
+
 from exr import read_channels  # noqa: E402
 
 
@@ -107,7 +109,10 @@ def test_restored_after_success(slab, tmp_path):
 def test_restored_after_error(slab, tmp_path, monkeypatch, where):
     scene = open_scene(slab, tmp_path)
     before = state(scene)
-    monkeypatch.setenv("SSS_TEST_FAIL", where)
+    if where == "cancel":
+        monkeypatch.setenv("SSS_TEST_FAIL", "cancel")
+    else:
+        faults.fail_after_render(monkeypatch, pipeline)
     with pytest.raises(pipeline.SSSError):
         pipeline.prepare_render(bpy.context)
     after = state(scene)
