@@ -61,13 +61,14 @@ def output_dir(scene):
     return path
 
 
-def _safe(name):
+def safe_name(name):
+    """A scene or layer name as it appears in the add-on's file names."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "scene"
 
 
 def paths_for(scene, frame):
     base = os.path.join(output_dir(scene),
-                        f"{_safe(scene.name)}_{frame:04d}")
+                        f"{safe_name(scene.name)}_{frame:04d}")
     return base + "_passes.exr", base + "_sss.exr", base + "_scene.json"
 
 
@@ -86,7 +87,8 @@ def scene_problem(scene):
     return None
 
 
-def _check_scene(scene):
+def check_scene(scene):
+    """Raises SSSError with scene_problem's sentence, if any."""
     problem = scene_problem(scene)
     if problem:
         raise SSSError(problem[0].lower() + problem[1:])
@@ -110,7 +112,7 @@ def save_passes(scene, path):
                        "yet?)")
 
 
-def _check_library():
+def check_library():
     """Fails before a long render, not after it, if libsss is missing."""
     try:
         native.library()
@@ -122,8 +124,8 @@ def prepare_render(context):
     """Renders the current frame with material SSS off and restores the
     scene; returns the job for scatter()."""
     scene = context.scene
-    _check_scene(scene)
-    _check_library()
+    check_scene(scene)
+    check_library()
     found = analyse(scene)
     inp, out, desc = paths_for(scene, scene.frame_current)
     with switched_off(scene, found) as undo:
@@ -149,8 +151,8 @@ def prepare_last_render(context):
     """Uses the existing Render Result (rendered with the passes the
     library needs) instead of rendering again."""
     scene = context.scene
-    _check_scene(scene)
-    _check_library()
+    check_scene(scene)
+    check_library()
     found = analyse(scene)
     inp, out, desc = paths_for(scene, scene.frame_current)
     # Pass indices must be those the render used: assign them the same way

@@ -41,7 +41,7 @@ from bpy.app.handlers import persistent
 
 from . import blender_compat as compat
 from . import live, native, nodes, pipeline, transmission
-from .switch_off import TAG, _Undo, switched_off
+from .switch_off import TAG, Undo, switched_off
 
 # The render in progress, per scene name (handlers get nothing else).
 _flows = {}
@@ -72,7 +72,7 @@ class Flow:
         self.copy = None
         self.folder = tempfile.mkdtemp(prefix="render-",
                                        dir=pipeline.output_dir(scene))
-        self.tree_undo = _Undo()
+        self.tree_undo = Undo()
         self.layers = []     # view layer names the compositor shows
         self.images = {}     # view layer name -> its result image
         self.done = set()    # frames whose results are on disk
@@ -91,13 +91,13 @@ class Flow:
 
     def result_path(self, layer, frame):
         return os.path.join(self.folder,
-                            f"{pipeline._safe(layer)}_{frame:04d}.exr")
+                            f"{pipeline.safe_name(layer)}_{frame:04d}.exr")
 
     # -- set-up
     def open(self):
         scene = self.scene
-        pipeline._check_scene(scene)
-        pipeline._check_library()
+        pipeline.check_scene(scene)
+        pipeline.check_library()
         copy = scene.copy()
         copy.name = f"{scene.name} (SSS passes)"
         self.copy = copy
@@ -413,7 +413,7 @@ def _unhook_old_setup(scene):
     if found is None:
         return None
     tree, composite, layers = found
-    undo = _Undo()
+    undo = Undo()
     source = composite.links[0].from_socket
     tree.links.remove(composite.links[0])
     undo.add(lambda: tree.links.new(source, composite))

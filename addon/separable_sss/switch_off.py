@@ -39,7 +39,7 @@ OPTIONAL_PASSES = {"emit": "emits", "environment": None,
 TAG = "SSS switch-off"  # label of every node we add
 
 
-class _Undo:
+class Undo:
     """A list of closures that put things back, run in reverse order."""
 
     def __init__(self):
@@ -199,7 +199,7 @@ def switched_off(scene, analysis, backlight=True):
     when a transmitting material is lit from behind: transmission.py); on
     leaving (normally or by an exception) every changed value, link, node,
     layer and material is restored or removed."""
-    undo = _Undo()
+    undo = Undo()
     try:
         _free_pass_indices(scene, analysis, undo)
         _enable_passes(scene, analysis, undo)
