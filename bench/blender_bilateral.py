@@ -12,10 +12,15 @@ the output), so S - B is the node's own cost. The scene has no Render
 Layers node, so Blender runs the compositor without rendering.
 """
 import argparse
+import os
 import sys
 import time
 
 import bpy
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__))), "addon"))
+from separable_sss import blender_compat as compat  # noqa: E402
 
 
 def parse_args():
@@ -47,25 +52,22 @@ def main():
     scene.render.resolution_percentage = 100
     scene.render.use_compositing = True
     scene.render.use_sequencer = False
-    scene.use_nodes = True
-    tree = scene.node_tree
+    tree = compat.compositor_tree(scene, create=True)
     tree.nodes.clear()
     src = tree.nodes.new("CompositorNodeImage")
     src.image = light
     det = tree.nodes.new("CompositorNodeImage")
     det.image = depth
-    out = tree.nodes.new("CompositorNodeComposite")
+    out = compat.composite_input(tree)  # Composite, or 5.0's group output
 
-    tree.links.new(src.outputs["Image"], out.inputs["Image"])
+    tree.links.new(src.outputs["Image"], out)
     baseline = best_render(scene, args.repeat)
 
     blur = tree.nodes.new("CompositorNodeBilateralblur")
-    blur.iterations = 1
-    blur.sigma_space = args.sigma_space
-    blur.sigma_color = args.sigma_color
+    compat.set_bilateral(blur, args.sigma_space, args.sigma_color)
     tree.links.new(src.outputs["Image"], blur.inputs["Image"])
     tree.links.new(det.outputs["Image"], blur.inputs["Determinator"])
-    tree.links.new(blur.outputs["Image"], out.inputs["Image"])
+    tree.links.new(blur.outputs["Image"], out)
     bilateral = best_render(scene, args.repeat)
     print(f"bilateral_seconds={bilateral:.4f} baseline_seconds={baseline:.4f}")
 

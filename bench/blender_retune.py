@@ -46,7 +46,7 @@ def main():
     if bpy.ops.sss.render() != {'FINISHED'}:
         raise RuntimeError("Render with SSS failed")
     render = time.perf_counter() - t0
-    sock = compat.radius_factor_input(pipeline.analyse(scene).found[0].node)
+    sock = compat.radius_factor_input(pipeline.analyse(scene).materials[0].node)
     base = sock.default_value
     totals, scatters = [], []
     for i in range(args.repeat):

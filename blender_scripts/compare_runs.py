@@ -171,7 +171,7 @@ def scattering_pixels(ch, found):
     from a pass file."""
     idx = np.rint(single(ch, "IndexMA"))
     depth = single(ch, "Depth")
-    mask = np.isin(idx, [f.pass_index for f in found.found]) & (depth < 1e9)
+    mask = np.isin(idx, [f.pass_index for f in found.materials]) & (depth < 1e9)
     return mask, idx, depth
 
 
@@ -205,7 +205,7 @@ def apply_methods(bench, renderer, samples, render_s, inp, desc, base_rgb):
 def run_sss_off(bench, args):
     scene = open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
-    if not found.found:
+    if not found.materials:
         raise RuntimeError("nothing scatters in this scene")
     for n in args.samples:
         scene.cycles.samples = n
@@ -235,7 +235,7 @@ def _remove_aov(layer, name):
 def _eevee_index_aovs(scene, found, undo):
     """A value AOV per scattering material carrying its coverage."""
     layer = bpy.context.view_layer
-    for f in found.found:
+    for f in found.materials:
         name = f"SSSCov{f.pass_index}"
         aov = layer.aovs.add()
         aov.name, aov.type = name, "VALUE"
@@ -254,7 +254,7 @@ def eevee_passes_for_library(ch, found):
     out = {k: v for k, v in ch.items() if not k.split(".")[-2].startswith(
         "SSSCov")}
     covs = [(f.pass_index, single(ch, f"SSSCov{f.pass_index}"))
-            for f in found.found]
+            for f in found.materials]
     stack = np.stack([c for _, c in covs], axis=0)
     best = np.argmax(stack, axis=0)
     idx = np.array([i for i, _ in covs], dtype=np.float32)[best]

@@ -231,7 +231,7 @@ def run(args):
     os.makedirs(work, exist_ok=True)
     scene = compare.open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
-    if not found.found:
+    if not found.materials:
         raise RuntimeError("nothing scatters in this scene")
     halves = reference(args, scene)
     ref = (halves[0] + halves[1]) / 2
@@ -294,7 +294,7 @@ def run(args):
         pos = np.stack([ch[f"{layer}.Position.{c}"] for c in "XYZ"], -1)
         H = mean_curvature(pos, mask)
         radius = np.zeros(mask.shape)
-        for f in found.found:
+        for f in found.materials:
             radius[idx == f.pass_index] = max(f.radius)
         curv_x = orient(H, pos, scene) * radius
     rows_b, cause, qerr = budget(ours_dn, ref, halves, mask, idx, depth,

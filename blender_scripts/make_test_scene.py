@@ -172,7 +172,7 @@ def main():
     separable_sss.register()
     try:
         found = analysis.analyse(scene)
-        for f in found.found:
+        for f in found.materials:
             # Burley with the Principled BSDF's own Subsurface Radius and
             # Color read as a mean free path, no energy calibration and no
             # transmission: a plain blur whose energy the tests can check.

@@ -234,7 +234,7 @@ def main():
     scene = open_scene(args)
     scene.cycles.samples = args.samples
     found = pipeline.analyse(scene)
-    for f in found.found:
+    for f in found.materials:
         if f.material.sss.transmission in ("OFF", "AUTO"):
             f.material.sss.transmission = args.model
     need, why = transmission.wanted(scene, found)
@@ -263,7 +263,7 @@ def main():
     ch = read_exr(inp)
     idx = np.rint(ch["ViewLayer.IndexMA.X"])
     depth = ch["ViewLayer.Depth.Z"]
-    mask = np.isin(idx, [f.pass_index for f in found.found]) & (depth < 1e9)
+    mask = np.isin(idx, [f.pass_index for f in found.materials]) & (depth < 1e9)
     back = np.zeros(mask.shape)
     if f"{transmission.LAYER}.DiffDir.R" in ch:
         b = rgb(ch, f"{transmission.LAYER}.DiffDir") + \

@@ -97,7 +97,7 @@ def scale_subsurface(found, scale):
     material's Principled BSDF (Subsurface, or Subsurface Scale from 4.0)
     by scale."""
     done = set()
-    for f in found.found:
+    for f in found.materials:
         if f.material.name in done:
             continue
         done.add(f.material.name)
@@ -116,12 +116,12 @@ def one_scale(args, scale, default_code, work):
     from separable_sss import native, pipeline
     scene = compare.open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
-    if not found.found:
+    if not found.materials:
         raise RuntimeError("nothing scatters in this scene")
     scale_subsurface(found, scale)
     found = pipeline.analyse(scene)
-    radius = max(max(f.radius) for f in found.found)
-    kernel = max(pipeline.kernel_pixels(scene, f) for f in found.found)
+    radius = max(max(f.radius) for f in found.materials)
+    kernel = max(pipeline.kernel_pixels(scene, f) for f in found.materials)
 
     halves, _ = compare.render_reference(scene, args.ref_samples,
                                          os.path.join(work, "ref"))

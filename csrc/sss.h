@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 9
+#define SSS_ABI_VERSION 10
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -130,6 +130,28 @@ typedef struct sss_passes {
 	sss_image facing;    /* optional, 1 channel: N . V in [0, 1] (the
 	                        fast model's view term; 1 when absent) */
 } sss_passes;
+
+/* The render passes libsss reads (the members of sss_passes above
+ * back_dir), one entry each, in sss_passes order. */
+enum sss_pass_need {
+	SSS_PASS_OPTIONAL = 0, /* used when present */
+	SSS_PASS_REQUIRED = 1, /* always needed */
+	SSS_PASS_CYCLES = 2    /* needed of a Cycles render (an EXR whose
+	                          header Cycles stamped) */
+};
+
+typedef struct sss_pass_info {
+	const char *name;       /* its short name in Blender's EXR: "DiffDir" */
+	const char *components; /* those read, in order: "RGB" */
+	const char *alt;        /* or this single component, or NULL */
+	int32_t need;           /* sss_pass_need */
+	const char *blender;    /* Blender's view layer use_pass_<blender> */
+	const char *hint;       /* under View Layer Properties > Passes */
+} sss_pass_info;
+
+/* Fills *info with pass i (0, 1, ...); SSS_ERR_INVALID_ARGUMENT past the
+ * last one or when info is NULL. The strings are the library's. */
+SSS_API sss_result sss_render_pass(int32_t i, sss_pass_info *info);
 
 /* Names the add-on and sss_process_exr use in Blender's multilayer EXR: the
  * back-light view layer, and its AOVs: SSSThicknessSq (thickness squared,
@@ -330,6 +352,41 @@ typedef struct sss_material {
  * radius (1, 0.2, 0.1) cm-scale for Burley). pass_index is left 0. */
 SSS_API void sss_material_default(sss_material *mat, int32_t kind);
 
+/* The material schema, one entry per key of a scene description's
+ * "materials" entry (docs/scene.md), in the table's order: what it sets,
+ * its default, its range and one line of help. */
+enum sss_field_type {
+	SSS_FIELD_FLOAT = 0, /* float */
+	SSS_FIELD_RGB = 1,   /* float[3] */
+	SSS_FIELD_INT = 2,   /* int32_t in [lo, hi] */
+	SSS_FIELD_ENUM = 3   /* int32_t, one of values[], named names[] */
+};
+
+typedef struct sss_field_info {
+	const char *key;      /* the JSON key */
+	const char *member;   /* the sss_material member it sets */
+	int32_t type;         /* sss_field_type */
+	int32_t profile;      /* the sss_profile_kind reading it, -1 = every */
+	int32_t transmits;    /* 1: read and checked only when transmission
+	                         is not SSS_TRANSMISSION_OFF */
+	double default_value[3]; /* sss_material_default's (one used unless
+	                         SSS_FIELD_RGB); taps: 17 for Jimenez */
+	double lo, hi;        /* the range; hi 1e30: no upper bound */
+	int32_t lo_open;      /* 1: lo itself is excluded */
+	int32_t name_count;   /* SSS_FIELD_ENUM: how many names it has */
+	const char *help;     /* one line */
+} sss_field_info;
+
+/* Fills *info with field i (0, 1, ...); SSS_ERR_INVALID_ARGUMENT past
+ * the last one or when info is NULL. The strings are the library's,
+ * valid as long as it is loaded. */
+SSS_API sss_result sss_material_field(int32_t i, sss_field_info *info);
+
+/* Name j (0 .. name_count - 1) of enum field i and, when value is not
+ * NULL, its value; NULL past the end. */
+SSS_API const char *sss_material_field_name(int32_t i, int32_t j,
+                                            int32_t *value);
+
 /* Checks one material; detail about the first bad field goes to errbuf. */
 SSS_API sss_result sss_material_validate(const sss_material *mat,
                                          char *errbuf, size_t errbuf_len);
@@ -445,6 +502,9 @@ typedef struct sss_options {
 	                            0: not (what its measurement compares) */
 } sss_options;
 
+/* sss_options_default's taps, and what a material's taps 0 means. */
+#define SSS_DEFAULT_TAPS 33
+
 SSS_API void sss_options_default(sss_options *opt);
 
 /* Sizes of the public structs, so bindings can check their layouts. */
@@ -470,7 +530,7 @@ SSS_API sss_result sss_apply(const sss_passes *passes, const sss_camera *cam,
 
 
 /* ------------------------------------------------------------ EXR files
- * (sss_exr.c, through the OpenEXR C API). An sss_exr holds one image part
+ * (sss_exr*.c, through the OpenEXR C API). An sss_exr holds one image part
  * decoded to float, grouped into passes: channel "ViewLayer.DiffDir.R"
  * is component R of pass "DiffDir" in layer "ViewLayer" (render output
  * naming); "DiffDir.R" has layer "" (File Output node naming); a channel

@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 /* Indexed by sss_method: the one place the methods are named. */
 static const struct {
@@ -47,19 +46,15 @@ static sss_result check_output(const char *name, const sss_image *out,
 	sss_result r = sss__check_image(name, out, 3, 1, w, h, errbuf, errbuf_len);
 	if (r)
 		return r;
-	const sss_image *inputs[] = {
-		&p->diff_dir, &p->diff_ind, &p->diff_col, &p->gloss_dir,
-		&p->gloss_ind, &p->gloss_col, &p->trans_dir, &p->trans_ind,
-		&p->trans_col, &p->emit, &p->env, &p->combined, &p->depth,
-		&p->index_ma, &p->position,
-	};
 	const char *olo, *ohi;
 	sss__span(out, &olo, &ohi);
-	for (size_t i = 0; i < sizeof inputs / sizeof *inputs; i++) {
-		if (!inputs[i]->data)
+	for (int32_t i = 0; i < sss__render_pass_count; i++) {
+		const sss_image *in = (const sss_image *)(const void *)(
+			(const char *)p + sss__render_passes[i].offset);
+		if (!in->data)
 			continue;
 		const char *lo, *hi;
-		sss__span(inputs[i], &lo, &hi);
+		sss__span(in, &lo, &hi);
 		if (olo < hi && lo < ohi)
 			return FAILX(SSS_ERR_INVALID_ARGUMENT, "output %s overlaps an "
 			             "input pass; inputs are never overwritten", name);
@@ -489,15 +484,16 @@ static sss_result run_auto(sss__job *job, rows_ctx *rc,
 	return r;
 }
 
-/* sss_apply, and the method each material ran (chosen: one per material,
- * -1 for one not on screen or that does not scatter; may be NULL). */
-sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
+/* Everything sss_apply checks before any work: the arguments, the
+ * options (into *opt, the defaults when user_opt is NULL), every pass and
+ * output, the camera and the material table. */
+static sss_result check_call(const sss_passes *p, const sss_camera *cam,
                              const sss_material *materials,
                              int32_t material_count,
                              const sss_options *user_opt,
                              const sss_image *out_combined,
                              const sss_image *out_diffuse_light,
-                             int32_t *chosen, char *errbuf,
+                             sss_options *opt, char *errbuf,
                              size_t errbuf_len)
 {
 	sss_result r;
@@ -513,11 +509,10 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	if (!out_combined && !out_diffuse_light)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "no output image given");
 
-	sss_options opt;
-	sss_options_default(&opt);
+	sss_options_default(opt);
 	if (user_opt)
-		opt = *user_opt;
-	if ((r = check_options(&opt, errbuf, errbuf_len)))
+		*opt = *user_opt;
+	if ((r = check_options(opt, errbuf, errbuf_len)))
 		return r;
 
 	if ((r = sss__check_image("DiffDir", &p->diff_dir, 3, 1, p->diff_dir.width,
@@ -527,25 +522,17 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	if ((uint64_t)w * (uint64_t)h > SIZE_MAX / (3 * sizeof(float)) / 2)
 		return FAILX(SSS_ERR_INVALID_ARGUMENT, "image %dx%d is too large",
 		             w, h);
-	struct {
-		const char *name;
-		const sss_image *im;
-		int32_t channels;
-		int required;
-	} passes[] = {
-		{"DiffInd", &p->diff_ind, 3, 0}, {"DiffCol", &p->diff_col, 3, 1},
-		{"GlossDir", &p->gloss_dir, 3, 0}, {"GlossInd", &p->gloss_ind, 3, 0},
-		{"GlossCol", &p->gloss_col, 3, 0}, {"TransDir", &p->trans_dir, 3, 0},
-		{"TransInd", &p->trans_ind, 3, 0}, {"TransCol", &p->trans_col, 3, 0},
-		{"Emit", &p->emit, 3, 0}, {"Env", &p->env, 3, 0},
-		{"Combined", &p->combined, 4, 0}, {"Depth", &p->depth, 1, 1},
-		{"IndexMA", &p->index_ma, 1, 1}, {"Position", &p->position, 3, 0},
-	};
-	for (size_t i = 0; i < sizeof passes / sizeof *passes; i++)
-		if ((r = sss__check_image(passes[i].name, passes[i].im,
-		                     passes[i].channels, passes[i].required, w, h,
-		                     errbuf, errbuf_len)))
+	/* Every pass of the table (DiffDir again: at its own size). */
+	for (int32_t i = 0; i < sss__render_pass_count; i++) {
+		const sss__pass_row *row = &sss__render_passes[i];
+		if ((r = sss__check_image(
+		         row->name,
+		         (const sss_image *)(const void *)((const char *)p +
+		                                           row->offset),
+		         (int32_t)strlen(row->components),
+		         row->need == SSS_PASS_REQUIRED, w, h, errbuf, errbuf_len)))
 			return r;
+	}
 	if ((r = check_output("combined", out_combined, p, w, h, errbuf,
 	                      errbuf_len)) ||
 	    (r = check_output("diffuse light", out_diffuse_light, p, w, h,
@@ -572,6 +559,97 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 			             "%d appears twice in the table", idx);
 		seen[idx / 8] |= (uint8_t)(1u << (idx % 8));
 	}
+	return SSS_OK;
+}
+
+/* The kernels of the table's materials: by_index (65536 entries) maps a
+ * pass index to its material's row where it scatters, else -1; zrange
+ * (2 per material) is scratch; *proj the camera's projection. */
+static void build_kernels(const sss_passes *p, const sss_camera *cam,
+                          const sss_material *materials,
+                          int32_t material_count, const sss_options *opt,
+                          int16_t *by_index, double *zrange,
+                          sss__kernel *kernels, sss__projection *proj)
+{
+	int32_t w = p->diff_dir.width, h = p->diff_dir.height;
+	/* Kernels only for the table's materials that are on screen (a big
+	 * scene-wide table costs nothing for the materials this frame lacks),
+	 * each limited by how far its pixels can reach. */
+	for (int i = 0; i < 65536; i++)
+		by_index[i] = -1;
+	for (int32_t m = 0; m < material_count; m++)
+		by_index[materials[m].pass_index] = (int16_t)m;
+	for (int32_t m = 0; m < material_count; m++)
+		zrange[2 * m] = INFINITY, zrange[2 * m + 1] = -INFINITY;
+	for (int32_t y = 0; y < h; y++)
+		for (int32_t x = 0; x < w; x++) {
+			float index = sss__at(&p->index_ma, x, y)[0];
+			if (!(index >= 0.5f && index < 65535.5f))
+				continue;
+			int16_t m = by_index[(int32_t)(index + 0.5f)];
+			double z = sss__at(&p->depth, x, y)[0];
+			if (m < 0 || !isfinite(z))
+				continue;
+			zrange[2 * m] = fmin(zrange[2 * m], z);
+			zrange[2 * m + 1] = fmax(zrange[2 * m + 1], z);
+		}
+	sss__projection_make(cam, w, h, proj, NULL, 0);
+	for (int32_t m = 0; m < material_count; m++) {
+		int32_t idx = materials[m].pass_index;
+		by_index[idx] = -1;
+		if (!(zrange[2 * m] <= zrange[2 * m + 1]))
+			continue; /* not on screen */
+		double limit = sss__reach_limit(proj, opt->max_support_px, w, h,
+		                                zrange[2 * m], zrange[2 * m + 1]);
+		sss__kernel_build(&materials[m], opt, cam->unit_scale, limit,
+		                  &kernels[m]);
+		if (kernels[m].support > 0.0)
+			by_index[idx] = (int16_t)m;
+	}
+}
+
+/* The chosen method over the signal; method_of[m]: what ran for each
+ * material (auto chooses per material). */
+static sss_result run_method(sss__job *job, rows_ctx *rc,
+                             const sss_passes *p,
+                             const sss_material *materials,
+                             int32_t material_count, const sss_options *opt,
+                             int32_t *method_of)
+{
+	for (int32_t m = 0; m < material_count; m++)
+		method_of[m] = opt->method;
+	switch (opt->method) {
+	case SSS_METHOD_AUTO:
+		return run_auto(job, rc, &p->depth, material_count, opt, method_of);
+	case SSS_METHOD_REFERENCE:
+		return sss__reference(job, opt->num_threads);
+	case SSS_METHOD_SEPARABLE_EXACT:
+		return sss__separable_exact(job, materials, material_count, opt);
+	case SSS_METHOD_DISK:
+		return sss__disk(job, opt->samples, opt->num_threads, NULL);
+	default:
+		return sss__separable(job, opt->num_threads);
+	}
+}
+
+/* sss_apply, and the method each material ran (chosen: one per material,
+ * -1 for one not on screen or that does not scatter; may be NULL). */
+sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
+                             const sss_material *materials,
+                             int32_t material_count,
+                             const sss_options *user_opt,
+                             const sss_image *out_combined,
+                             const sss_image *out_diffuse_light,
+                             int32_t *chosen, char *errbuf,
+                             size_t errbuf_len)
+{
+	sss_result r;
+	sss_options opt;
+	if ((r = check_call(p, cam, materials, material_count, user_opt,
+	                    out_combined, out_diffuse_light, &opt, errbuf,
+	                    errbuf_len)))
+		return r;
+	int32_t w = p->diff_dir.width, h = p->diff_dir.height;
 	/* Transmission (sss_transmission.c): back-lit light joins the signal
 	 * before the blur; NULL when nothing transmits. */
 	sss__transmission *transmission = NULL;
@@ -606,41 +684,9 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		goto done;
 	}
 
-	/* Kernels only for the table's materials that are on screen (a big
-	 * scene-wide table costs nothing for the materials this frame lacks),
-	 * each limited by how far its pixels can reach. */
-	for (int i = 0; i < 65536; i++)
-		by_index[i] = -1;
-	for (int32_t m = 0; m < material_count; m++)
-		by_index[materials[m].pass_index] = (int16_t)m;
-	for (int32_t m = 0; m < material_count; m++)
-		zrange[2 * m] = INFINITY, zrange[2 * m + 1] = -INFINITY;
-	for (int32_t y = 0; y < h; y++)
-		for (int32_t x = 0; x < w; x++) {
-			float index = sss__at(&p->index_ma, x, y)[0];
-			if (!(index >= 0.5f && index < 65535.5f))
-				continue;
-			int16_t m = by_index[(int32_t)(index + 0.5f)];
-			double z = sss__at(&p->depth, x, y)[0];
-			if (m < 0 || !isfinite(z))
-				continue;
-			zrange[2 * m] = fmin(zrange[2 * m], z);
-			zrange[2 * m + 1] = fmax(zrange[2 * m + 1], z);
-		}
 	sss__projection proj;
-	sss__projection_make(cam, w, h, &proj, NULL, 0);
-	for (int32_t m = 0; m < material_count; m++) {
-		int32_t idx = materials[m].pass_index;
-		by_index[idx] = -1;
-		if (!(zrange[2 * m] <= zrange[2 * m + 1]))
-			continue; /* not on screen */
-		double limit = sss__reach_limit(&proj, opt.max_support_px, w, h,
-		                                zrange[2 * m], zrange[2 * m + 1]);
-		sss__kernel_build(&materials[m], &opt, cam->unit_scale, limit,
-		                  &kernels[m]);
-		if (kernels[m].support > 0.0)
-			by_index[idx] = (int16_t)m;
-	}
+	build_kernels(p, cam, materials, material_count, &opt, by_index, zrange,
+	              kernels, &proj);
 
 	sss__job job = {
 		.width = w, .height = h, .kernels = kernels, .slot = slot,
@@ -689,19 +735,8 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	}
 
 	if (material_count > 0) {
-		for (int32_t m = 0; m < material_count; m++)
-			method_of[m] = opt.method;
-		if (opt.method == SSS_METHOD_AUTO)
-			r = run_auto(&job, &rc, &p->depth, material_count, &opt,
-			             method_of);
-		else if (opt.method == SSS_METHOD_REFERENCE)
-			r = sss__reference(&job, opt.num_threads);
-		else if (opt.method == SSS_METHOD_SEPARABLE_EXACT)
-			r = sss__separable_exact(&job, materials, material_count, &opt);
-		else if (opt.method == SSS_METHOD_DISK)
-			r = sss__disk(&job, opt.samples, opt.num_threads, NULL);
-		else
-			r = sss__separable(&job, opt.num_threads);
+		r = run_method(&job, &rc, p, materials, material_count, &opt,
+		               method_of);
 		if (r == SSS_ERR_OUT_OF_MEMORY)
 			FAILX(r, "cannot allocate working memory for a %dx%d image",
 			      w, h);

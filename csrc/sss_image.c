@@ -1,8 +1,34 @@
-/* sss_image.c - checks of the caller's image views, shared by every
- * stage that reads a pass. */
+/* sss_image.c - the render passes' table and the checks of the caller's
+ * image views, shared by every stage that reads a pass. */
 #include "sss_internal.h"
+#include "sss_pass_table.h"
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
+#include <stddef.h>
+#include <string.h>
+
+#define ROW(name, member, components, alt, need, blender, hint) \
+	{name, offsetof(sss_passes, member), components, alt, need, blender, \
+	 hint},
+const sss__pass_row sss__render_passes[] = {SSS_RENDER_PASSES(ROW)};
+#undef ROW
+const int32_t sss__render_pass_count =
+	(int32_t)(sizeof sss__render_passes / sizeof *sss__render_passes);
+
+sss_result sss_render_pass(int32_t i, sss_pass_info *info)
+{
+	if (!info || i < 0 || i >= sss__render_pass_count)
+		return SSS_ERR_INVALID_ARGUMENT;
+	const sss__pass_row *p = &sss__render_passes[i];
+	memset(info, 0, sizeof *info);
+	info->name = p->name;
+	info->components = p->components;
+	info->alt = p->alt;
+	info->need = p->need;
+	info->blender = p->blender;
+	info->hint = p->hint;
+	return SSS_OK;
+}
+
 
 sss_result sss__check_image(const char *name, const sss_image *im,
                             int32_t min_channels, int required, int32_t w,

@@ -81,13 +81,19 @@ sss_result sss__frame_check_result(const sss_frame *frame, char *err,
  * any work (sss_frame.c). */
 sss_result sss__process_options_check(const sss_process_options *opt,
                                       char *err, size_t errlen);
-/* Removes every pass of a layer from an EXR image (sss_exr.c). */
+/* Removes every pass of a layer from an EXR image (sss_exr.c, the model). */
 void sss__exr_remove_layer(sss_exr *exr, const char *layer);
 
 /* errbuf helper: formats into errbuf when given, returns code. */
 sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
                      const char *fmt, ...)
 	__attribute__((format(printf, 4, 5)));
+
+/* In a function with errbuf and errbuf_len, the one way to fail: FAIL
+ * with SSS_ERR_INVALID_ARGUMENT, FAILX with another status. */
+#define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
+                            __VA_ARGS__)
+#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 /* Profiles (sss_profile.c). A support beyond max_support (scene units;
  * 0 = no limit) is shrunk to it, profile lengths with it: see
@@ -330,6 +336,18 @@ size_t sss__zip_deflate(struct libdeflate_compressor *deflate,
 int sss__zip_inflate(struct libdeflate_decompressor *inflate,
                      const uint8_t *in, size_t in_n, uint8_t *scratch,
                      uint8_t *out, size_t n);
+
+/* One render pass libsss reads (sss_pass_table.h), where it goes in
+ * sss_passes. */
+typedef struct sss__pass_row {
+	const char *name;
+	size_t offset; /* of its sss_image in sss_passes */
+	const char *components, *alt;
+	int32_t need;  /* sss_pass_need */
+	const char *blender, *hint;
+} sss__pass_row;
+extern const sss__pass_row sss__render_passes[];
+extern const int32_t sss__render_pass_count;
 
 /* Checks one pass view against the frame size w x h (sss_apply.c);
  * absent passes (data == NULL) are fine unless required. Errors name the

@@ -648,10 +648,19 @@ static void progress_bar(int done, int total, int failed)
 	fflush(stderr);
 }
 
-int main(int argc, char **argv)
+/* The options' defaults: the scene's or the library's everywhere. */
+static args args_default(void)
 {
-	args a = {NULL, NULL, NULL, NULL, NULL, -1, 1.0, -1, -1, -1, 32768, 32768,
-	          0, -1, -1, 0, 0};
+	return (args){.method = -1, .radius_scale = 1.0, .compression = -1,
+	              .threads = -1, .samples = -1, .max_w = 32768,
+	              .max_h = 32768, .max_pixels = 0, .max_channels = -1,
+	              .max_bytes = -1};
+}
+
+/* The command line into *a: -1 to go on, else the exit status (0 after
+ * --help or --version, 2 for bad usage, said on stderr). */
+static int parse_args(int argc, char **argv, args *a)
+{
 	static const struct option longopts[] = {
 		{"output", required_argument, NULL, 'o'},
 		{"scene", required_argument, NULL, 's'},
@@ -677,63 +686,63 @@ int main(int argc, char **argv)
 	while ((c = getopt_long(argc, argv, "o:s:f:m:r:l:c:t:qhV", longopts,
 	                        NULL)) != -1) {
 		switch (c) {
-		case 'o': a.output = optarg; break;
-		case 's': a.scene = optarg; break;
-		case 'f': a.frames = optarg; break;
-		case 'l': a.layer = optarg; break;
-		case 'q': a.quiet = 1; break;
-		case 'R': a.resume = 1; break;
+		case 'o': a->output = optarg; break;
+		case 's': a->scene = optarg; break;
+		case 'f': a->frames = optarg; break;
+		case 'l': a->layer = optarg; break;
+		case 'q': a->quiet = 1; break;
+		case 'R': a->resume = 1; break;
 		case 'h': print_usage(); return 0;
 		case 'V':
 			printf("sss %s (libsss ABI %u)\n", sss_version_string(),
 			       sss_abi_version());
 			return 0;
 		case 'm':
-			a.method = method_by_name(optarg);
-			if (a.method < 0)
+			a->method = method_by_name(optarg);
+			if (a->method < 0)
 				return usage_error("unknown method '%s' (sss --help "
 				                   "lists them)", optarg);
 			break;
 		case 'c':
-			a.compression = lookup(optarg, compression_names, 8);
-			if (a.compression < 0)
+			a->compression = lookup(optarg, compression_names, 8);
+			if (a->compression < 0)
 				return usage_error("unknown compression '%s'", optarg);
 			break;
 		case 'r':
 			errno = 0;
-			a.radius_scale = strtod(optarg, &end);
+			a->radius_scale = strtod(optarg, &end);
 			if (*end || end == optarg || errno ||
-			    isspace((unsigned char)*optarg) || !(a.radius_scale >= 0) ||
-			    a.radius_scale > 1e30)
+			    isspace((unsigned char)*optarg) ||
+			    !(a->radius_scale >= 0) || a->radius_scale > 1e30)
 				return usage_error("--radius-scale '%s' must be a number "
 				                   ">= 0", optarg);
 			break;
 		case 't':
 			if (parse_int(optarg, 0, 256, &n))
 				return usage_error("--threads '%s' must be 0..256", optarg);
-			a.threads = (int)n;
+			a->threads = (int)n;
 			break;
 		case 'N':
 			if (parse_int(optarg, 1, 4096, &n))
 				return usage_error("--samples '%s' must be 1..4096", optarg);
-			a.samples = (int)n;
+			a->samples = (int)n;
 			break;
 		case 'C':
-			if (parse_int(optarg, 1, INT32_MAX, &a.max_channels))
+			if (parse_int(optarg, 1, INT32_MAX, &a->max_channels))
 				return usage_error("--max-channels '%s' must be "
 				                   "1..2147483647", optarg);
 			break;
 		case 'M':
-			if (parse_bytes(optarg, &a.max_bytes))
+			if (parse_bytes(optarg, &a->max_bytes))
 				return usage_error("--max-memory '%s' must be a size "
 				                   "like 8G, 512M or 0 (the machine's "
 				                   "memory)", optarg);
 			break;
 		case 'S':
-			if (parse_size(optarg, &a.max_w, &a.max_h))
+			if (parse_size(optarg, &a->max_w, &a->max_h))
 				return usage_error("--max-size '%s' must be WIDTHxHEIGHT, "
 				                   "each 1..1048576", optarg);
-			a.max_pixels = (long long)a.max_w * a.max_h;
+			a->max_pixels = (long long)a->max_w * a->max_h;
 			break;
 		default:
 			fprintf(stderr, "Try 'sss --help'.\n");
@@ -745,23 +754,132 @@ int main(int argc, char **argv)
 		                   ? "missing INPUT file"
 		                   : "exactly one INPUT file (use #### and --frames "
 		                     "for sequences)");
-	a.input = argv[optind];
-	if (!a.output)
+	a->input = argv[optind];
+	if (!a->output)
 		return usage_error("%s", "missing -o OUTPUT");
-	if (!a.output[0])
+	if (!a->output[0])
 		return usage_error("%s", "-o OUTPUT is empty");
-	if (!a.scene)
+	if (!a->scene)
 		return usage_error("%s", "missing --scene SCENE.json (camera and "
 		                         "materials)");
-	int in_seq = is_pattern(a.input);
-	int out_seq = is_pattern(a.output);
-	if (in_seq != out_seq)
+	int in_seq = is_pattern(a->input);
+	if (in_seq != is_pattern(a->output))
 		return usage_error("%s", "INPUT and OUTPUT must both be #### "
 		                         "patterns, or neither");
-	if (in_seq && !a.frames)
+	if (in_seq && !a->frames)
 		return usage_error("%s", "a #### pattern needs --frames");
-	if (!in_seq && a.frames)
+	if (!in_seq && a->frames)
 		return usage_error("%s", "--frames needs #### patterns");
+	return -1;
+}
+
+/* What the command line asks of sss_process_exr. */
+static void process_options(const args *a, sss_process_options *po)
+{
+	sss_process_options_default(po);
+	po->layer = a->layer;
+	po->method = a->method;
+	po->num_threads = a->threads;
+	po->samples = a->samples;
+	po->radius_scale = (float)a->radius_scale;
+	po->exr.max_width = a->max_w;
+	po->exr.max_height = a->max_h;
+	if (a->max_pixels)
+		po->exr.max_pixels = a->max_pixels;
+	if (a->compression >= 0)
+		po->exr.compression = a->compression;
+	if (a->max_channels > 0)
+		po->exr.max_channels = (int32_t)a->max_channels;
+	if (a->max_bytes >= 0)
+		po->exr.max_bytes = a->max_bytes;
+	po->exr.temporary_fn = on_temporary;
+}
+
+/* One run over the frames: what every frame shares and the tallies. */
+typedef struct batch {
+	const args *a;
+	int in_seq;
+	int bar;                 /* a progress bar on the terminal */
+	sss_scene *scene;
+	file_id scene_id;
+	sss_process_options po;
+	int32_t nmat;
+	int32_t *chosen, *told;  /* the method each material ran; as told */
+	int failed, skipped;
+	sss_timings total;
+	char err[10240];
+} batch;
+
+/* Frame f (the i-th of count): checked, skipped (--resume) or processed,
+ * and said. */
+static void run_frame(batch *b, int i, int f, int count)
+{
+	const args *a = b->a;
+	char in[4096], out[4096];
+	sss_timings t = {0, 0, 0};
+	int bad = 0;
+	char why[sizeof b->err];
+	if (expand(a->input, f, in, sizeof in) ||
+	    expand(a->output, f, out, sizeof out)) {
+		const char *which = expand(a->input, f, in, sizeof in) ? a->input
+		                                                       : a->output;
+		char frame[32] = "";
+		if (b->in_seq)
+			snprintf(frame, sizeof frame, "frame %d: ", f);
+		snprintf(b->err, sizeof b->err, "%sthe path made from %.80s... is "
+		         "longer than %zu bytes", frame, which, sizeof in - 1);
+		bad = 1;
+	} else if (check_frame(in, out, b->scene_id, a->scene, b->err,
+	                       sizeof b->err)) {
+		bad = 1;
+	} else if (a->resume && access(out, F_OK) == 0 &&
+	           complete_output(out, &b->po.exr, why, sizeof why)) {
+		b->skipped++;
+		if (!a->quiet) {
+			put_clean(stdout, out);
+			printf(": exists, skipped (--resume)\n");
+		}
+		if (b->bar)
+			progress_bar(i + 1, count, b->failed);
+		return;
+	} else {
+		if (a->resume && access(out, F_OK) == 0) {
+			char line[sizeof why + 4096 + 128];
+			snprintf(line, sizeof line, "%s: exists but is not a "
+			         "complete output (%s); writing it again", out, why);
+			say(stderr, "", line);
+		}
+		bad = sss_process_exr(in, out, b->scene, &b->po, &t, b->err,
+		                      sizeof b->err) != SSS_OK;
+	}
+	if (b->bar)
+		fputc('\r', stderr);
+	if (bad) {
+		b->failed++;
+		say(stderr, "error: ", b->err);
+	} else if (!a->quiet) {
+		put_clean(stdout, in);
+		fputs(" -> ", stdout);
+		put_clean(stdout, out);
+		printf(": read %.3f s, sss %.3f s, write %.3f s\n", t.read,
+		       t.scatter, t.write);
+		if (b->chosen)
+			tell_methods(b->scene, b->nmat, b->chosen, b->told);
+		fflush(stdout);
+	}
+	b->total.read += t.read;
+	b->total.scatter += t.scatter;
+	b->total.write += t.write;
+	if (b->bar)
+		progress_bar(i + 1, count, b->failed);
+}
+
+int main(int argc, char **argv)
+{
+	args a = args_default();
+	int status = parse_args(argc, argv, &a);
+	if (status >= 0)
+		return status;
 
 	frame_list frames = {NULL, 0};
 	int single = 0;
@@ -778,10 +896,10 @@ int main(int argc, char **argv)
 		frames.count = 1;
 	}
 
-	char err[10240], warn[4096] = "";
-	sss_scene *scene = NULL;
-	sss_result r = sss_scene_load(a.scene, &scene, warn, sizeof warn, err,
-	                              sizeof err);
+	batch b = {.a = &a, .in_seq = is_pattern(a.input)};
+	char warn[4096] = "";
+	sss_result r = sss_scene_load(a.scene, &b.scene, warn, sizeof warn,
+	                              b.err, sizeof b.err);
 	/* warnings: one line each */
 	for (char *line = warn; *line;) {
 		char *nl = strchr(line, '\n');
@@ -792,121 +910,42 @@ int main(int argc, char **argv)
 		line = nl ? nl + 1 : line + strlen(line);
 	}
 	if (r) {
-		say(stderr, "", err);
+		say(stderr, "", b.err);
 		if (frames.frames != &single)
 			free(frames.frames);
 		return 2;
 	}
 
-	if (in_seq && check_sequence(a.input, a.output, &frames, err,
-	                             sizeof err)) {
-		say(stderr, "error: ", err);
-		sss_scene_free(scene);
+	if (b.in_seq && check_sequence(a.input, a.output, &frames, b.err,
+	                               sizeof b.err)) {
+		say(stderr, "error: ", b.err);
+		sss_scene_free(b.scene);
 		free(frames.frames);
 		return 2;
 	}
-	file_id scene_id = identify(a.scene);
+	b.scene_id = identify(a.scene);
 	catch_signals();
-	int failed = 0, skipped = 0, bar = !a.quiet && isatty(STDERR_FILENO) &&
-	                                   frames.count > 1;
-	sss_process_options po;
-	sss_process_options_default(&po);
-	po.layer = a.layer;
-	po.method = a.method;
-	po.num_threads = a.threads;
-	po.samples = a.samples;
-	po.radius_scale = (float)a.radius_scale;
-	po.exr.max_width = a.max_w;
-	po.exr.max_height = a.max_h;
-	if (a.max_pixels)
-		po.exr.max_pixels = a.max_pixels;
-	if (a.compression >= 0)
-		po.exr.compression = a.compression;
-	if (a.max_channels > 0)
-		po.exr.max_channels = (int32_t)a.max_channels;
-	if (a.max_bytes >= 0)
-		po.exr.max_bytes = a.max_bytes;
-	po.exr.temporary_fn = on_temporary;
+	b.bar = !a.quiet && isatty(STDERR_FILENO) && frames.count > 1;
+	process_options(&a, &b.po);
 	/* The method each material ran, told when it changes (auto chooses
 	 * per frame). */
-	int32_t nmat = 0;
-	sss_scene_materials(scene, &nmat);
-	int32_t *chosen = calloc(2 * (size_t)(nmat > 0 ? nmat : 1),
-	                         sizeof *chosen);
-	int32_t *told = chosen ? chosen + (nmat > 0 ? nmat : 1) : NULL;
-	if (told)
-		for (int32_t m = 0; m < nmat; m++)
-			told[m] = -2;
-	po.chosen_methods = chosen;
-	sss_timings total = {0, 0, 0};
-	for (int i = 0; i < frames.count; i++) {
-		char in[4096], out[4096];
-		int f = frames.frames[i];
-		sss_timings t = {0, 0, 0};
-		int bad = 0;
-		char why[sizeof err];
-		if (expand(a.input, f, in, sizeof in) ||
-		    expand(a.output, f, out, sizeof out)) {
-			const char *which = expand(a.input, f, in, sizeof in) ? a.input
-			                                                      : a.output;
-			char frame[32] = "";
-			if (in_seq)
-				snprintf(frame, sizeof frame, "frame %d: ", f);
-			snprintf(err, sizeof err, "%sthe path made from %.80s... is "
-			         "longer than %zu bytes", frame, which, sizeof in - 1);
-			bad = 1;
-		} else if (check_frame(in, out, scene_id, a.scene, err,
-		                       sizeof err)) {
-			bad = 1;
-		} else if (a.resume && access(out, F_OK) == 0 &&
-		           complete_output(out, &po.exr, why, sizeof why)) {
-			skipped++;
-			if (!a.quiet) {
-				put_clean(stdout, out);
-				printf(": exists, skipped (--resume)\n");
-			}
-			if (bar)
-				progress_bar(i + 1, frames.count, failed);
-			continue;
-		} else {
-			if (a.resume && access(out, F_OK) == 0) {
-				char line[sizeof why + 4096 + 128];
-				snprintf(line, sizeof line, "%s: exists but is not a "
-				         "complete output (%s); writing it again", out,
-				         why);
-				say(stderr, "", line);
-			}
-			bad = sss_process_exr(in, out, scene, &po, &t, err,
-			                      sizeof err) != SSS_OK;
-		}
-		if (bar)
-			fputc('\r', stderr);
-		if (bad) {
-			failed++;
-			say(stderr, "error: ", err);
-		} else if (!a.quiet) {
-			put_clean(stdout, in);
-			fputs(" -> ", stdout);
-			put_clean(stdout, out);
-			printf(": read %.3f s, sss %.3f s, write %.3f s\n", t.read,
-			       t.scatter, t.write);
-			if (chosen)
-				tell_methods(scene, nmat, chosen, told);
-			fflush(stdout);
-		}
-		total.read += t.read;
-		total.scatter += t.scatter;
-		total.write += t.write;
-		if (bar)
-			progress_bar(i + 1, frames.count, failed);
-	}
+	sss_scene_materials(b.scene, &b.nmat);
+	size_t slots = (size_t)(b.nmat > 0 ? b.nmat : 1);
+	b.chosen = calloc(2 * slots, sizeof *b.chosen);
+	b.told = b.chosen ? b.chosen + slots : NULL;
+	if (b.told)
+		for (int32_t m = 0; m < b.nmat; m++)
+			b.told[m] = -2;
+	b.po.chosen_methods = b.chosen;
+	for (int i = 0; i < frames.count; i++)
+		run_frame(&b, i, frames.frames[i], frames.count);
 	if (!a.quiet && frames.count > 1)
 		printf("%d frames: %d written, %d skipped, %d failed; read %.2f s, "
 		       "sss %.2f s, write %.2f s\n", frames.count,
-		       frames.count - failed - skipped, skipped, failed, total.read,
-		       total.scatter, total.write);
-	sss_scene_free(scene);
-	free(chosen);
+		       frames.count - b.failed - b.skipped, b.skipped, b.failed,
+		       b.total.read, b.total.scatter, b.total.write);
+	sss_scene_free(b.scene);
+	free(b.chosen);
 	if (frames.frames != &single)
 		free(frames.frames);
 	/* A report that could not be written (a full disk, a closed pipe) is
@@ -916,5 +955,5 @@ int main(int argc, char **argv)
 		        strerror(errno));
 		return 1;
 	}
-	return failed ? 1 : 0;
+	return b.failed ? 1 : 0;
 }

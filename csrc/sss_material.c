@@ -1,7 +1,9 @@
 /* sss_material.c - material defaults, validation and Burley's radius
  * mapping: everything about one row of the table, before any tabulation. */
+#include "sss_fields.h"
 #include "sss_internal.h"
 
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -15,12 +17,38 @@ const float sss__deon_weight[6][3] = {
 	{0.358f, 0.004f, 0.000f}, {0.078f, 0.000f, 0.000f},
 };
 
-static void set3(float *v, float a, float b, float c)
-{
-	v[0] = a;
-	v[1] = b;
-	v[2] = c;
-}
+/* The schema (sss_fields.h) as data: where each field lives and what it
+ * may hold. */
+typedef struct field {
+	const char *key, *member;
+	int32_t type; /* sss_field_type */
+	int32_t profile, when;
+	size_t offset;
+	float def[3];
+	double lo, hi;
+	int32_t lo_open;
+	const sss__name_value *names;
+	int32_t name_count;
+	const char *help;
+} field;
+
+#define TYPE_F32 SSS_FIELD_FLOAT
+#define TYPE_VEC3 SSS_FIELD_RGB
+#define TYPE_INT SSS_FIELD_INT
+#define TYPE_ENUM SSS_FIELD_ENUM
+#define ROW(...) ROW_(__VA_ARGS__)
+#define ROW_(key, member, type, profile, when, d0, d1, d2, lo, hi, lo_open, \
+            names, count, help) \
+	{key, #member, TYPE_##type, SSS__P_##profile, SSS__WHEN_##when, \
+	 offsetof(sss_material, member), {d0, d1, d2}, lo, hi, lo_open, names, \
+	 count, help},
+static const field fields[] = {SSS_MATERIAL_FIELDS(ROW)};
+#undef ROW
+#undef ROW_
+#undef TYPE_F32
+#undef TYPE_VEC3
+#undef TYPE_INT
+#undef TYPE_ENUM
 
 void sss_material_default(sss_material *mat, int32_t kind)
 {
@@ -29,118 +57,164 @@ void sss_material_default(sss_material *mat, int32_t kind)
 	memset(mat, 0, sizeof *mat);
 	mat->struct_size = sizeof *mat;
 	mat->kind = kind;
-	mat->strength = 1.0f;
-	mat->texturing = SSS_TEXTURING_POST;
-
-	/* Burley: Jensen 2001 "skin1" diffuse mean free paths, in metres. */
-	set3(mat->radius, 0.00367f, 0.00137f, 0.00068f);
-	mat->burley_mapping = SSS_BURLEY_CYCLES;
-	set3(mat->albedo, 0.8f, 0.8f, 0.8f);
-
+	for (int k = 0; k < SSS__COUNT(fields); k++) {
+		const field *f = &fields[k];
+		char *at = (char *)mat + f->offset;
+		if (f->type == SSS_FIELD_FLOAT || f->type == SSS_FIELD_RGB)
+			memcpy(at, f->def, sizeof(float) *
+			       (f->type == SSS_FIELD_RGB ? 3 : 1));
+		else
+			*(int32_t *)(void *)at = (int32_t)f->def[0];
+	}
+	/* Gaussians: d'Eon's six-Gaussian skin (a list, not a table row). */
 	mat->gaussian_count = 6;
 	for (int i = 0; i < 6; i++) {
 		mat->gaussian_variance[i] = sss__deon_variance[i];
 		memcpy(mat->gaussian_weight[i], sss__deon_weight[i],
 		       sizeof(float) * 3);
 	}
-	mat->gaussian_scale = 1.0f;
-
-	/* Jimenez et al. demo defaults (SeparableSSS.cpp). */
-	mat->jimenez_width = 0.012f;
-	set3(mat->jimenez_strength, 0.48f, 0.41f, 0.28f);
-	set3(mat->jimenez_falloff, 1.0f, 0.37f, 0.3f);
+	/* Jimenez et al.'s demo (SeparableSSS.cpp) uses 17 taps. */
 	if (kind == SSS_PROFILE_JIMENEZ)
 		mat->taps = 17;
-
-	/* Near/far Gaussians: the artist model's defaults, sigmas in mm. */
-	mat->scatter_scale = 1.0f;
-	mat->near_far_balance = 0.5f;
-	set3(mat->near_sigma, 0.35f, 0.07f, 0.035f);
-	set3(mat->far_sigma, 1.0f, 0.12f, 0.10f);
-
-	/* Transmission: off; when turned on, the profile's own model. */
-	mat->transmission = SSS_TRANSMISSION_OFF;
-	mat->transmission_strength = 1.0f;
-	set3(mat->transmission_color, 1.0f, 1.0f, 1.0f);
-	mat->transmission_distance = 0.01f;
-	mat->transmission_translucency = 0.83f; /* Jimenez's demo */
-	mat->transmission_distortion = 0.2f;
-	mat->transmission_power = 4.0f;
-	mat->transmission_scale = 1.0f;
-	mat->transmission_ambient = 0.0f;
-	mat->thickness_scale = 1.0f;
-
-	mat->calibration = SSS_CALIBRATION_NONE;
 }
 
-#define FAIL(...) sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
-                            __VA_ARGS__)
-
-static int in_range(float v, float lo, float hi)
+sss_result sss_material_field(int32_t i, sss_field_info *info)
 {
-	return isfinite(v) && v >= lo && v <= hi;
-}
-
-static sss_result check3(const float *v, float lo, float hi, int open_lo,
-                         const char *field, int32_t idx, char *errbuf,
-                         size_t errbuf_len)
-{
-	static const char rgb[3] = {'r', 'g', 'b'};
-	for (int c = 0; c < 3; c++) {
-		if (!in_range(v[c], lo, hi) || (open_lo && v[c] <= lo))
-			return FAIL("material %d: %s.%c = %g must be %s %g and <= %g",
-			            idx, field, rgb[c], (double)v[c],
-			            open_lo ? ">" : ">=", (double)lo, (double)hi);
-	}
+	if (!info || i < 0 || i >= SSS__COUNT(fields))
+		return SSS_ERR_INVALID_ARGUMENT;
+	const field *f = &fields[i];
+	memset(info, 0, sizeof *info);
+	info->key = f->key;
+	info->member = f->member;
+	info->type = f->type;
+	info->profile = f->profile;
+	info->transmits = f->when == SSS__WHEN_TRANSMITS;
+	for (int c = 0; c < 3; c++)
+		info->default_value[c] = f->def[c];
+	info->lo = f->lo;
+	info->hi = f->hi;
+	info->lo_open = f->lo_open;
+	info->name_count = f->name_count;
+	info->help = f->help;
 	return SSS_OK;
 }
 
-/* The transmission fields, checked only when the material transmits. */
-static sss_result check_transmission(const sss_material *mat, char *errbuf,
-                                     size_t errbuf_len)
+const char *sss_material_field_name(int32_t i, int32_t j, int32_t *value)
+{
+	if (i < 0 || i >= SSS__COUNT(fields) || j < 0 ||
+	    j >= fields[i].name_count)
+		return NULL;
+	if (value)
+		*value = fields[i].names[j].value;
+	return fields[i].names[j].name;
+}
+
+
+/* Compared as floats, as the field holds them: 1e30 read into a float
+ * is 1.0000000150e30, which is still "at most 1e30". */
+static int in_span(float v, const field *f)
+{
+	float lo = (float)f->lo, hi = (float)f->hi;
+	return isfinite(v) && v >= lo && v <= hi && !(f->lo_open && v <= lo);
+}
+
+/* "in [0, 1]", "> 0", ">= 0" */
+static const char *span_text(const field *f, char *buf, size_t len)
+{
+	if (f->hi < SSS__BIG)
+		snprintf(buf, len, "in %c%g, %g]", f->lo_open ? '(' : '[', f->lo,
+		         f->hi);
+	else
+		snprintf(buf, len, "%s %g", f->lo_open ? ">" : ">=", f->lo);
+	return buf;
+}
+
+static int has_name(const field *f, int32_t v)
+{
+	for (int j = 0; j < f->name_count; j++)
+		if (f->names[j].value == v)
+			return 1;
+	return 0;
+}
+
+/* One field of the table, whatever its type. */
+static sss_result check_field(const sss_material *mat, const field *f,
+                              char *errbuf, size_t errbuf_len)
+{
+	static const char rgb[3] = {'r', 'g', 'b'};
+	int32_t idx = mat->pass_index;
+	const char *at = (const char *)mat + f->offset;
+	char span[48];
+	switch (f->type) {
+	case SSS_FIELD_FLOAT:
+	case SSS_FIELD_RGB:
+		for (int c = 0; c < (f->type == SSS_FIELD_RGB ? 3 : 1); c++) {
+			float v;
+			memcpy(&v, at + c * sizeof(float), sizeof v);
+			if (in_span(v, f))
+				continue;
+			if (f->type == SSS_FIELD_FLOAT)
+				return FAIL("material %d: %s %g must be %s", idx, f->member,
+				            (double)v, span_text(f, span, sizeof span));
+			return FAIL("material %d: %s.%c = %g must be %s", idx,
+			            f->member, rgb[c], (double)v,
+			            span_text(f, span, sizeof span));
+		}
+		return SSS_OK;
+	case SSS_FIELD_INT: {
+		int32_t v = *(const int32_t *)(const void *)at;
+		if (v < f->lo || v > f->hi)
+			return FAIL("material %d: %s %d must be %g..%g", idx, f->member,
+			            v, f->lo, f->hi);
+		return SSS_OK;
+	}
+	default: {
+		int32_t v = *(const int32_t *)(const void *)at;
+		if (!has_name(f, v))
+			return FAIL("material %d: unknown %s %d", idx, f->member, v);
+		return SSS_OK;
+	}
+	}
+}
+
+/* Whether the material reads field f. */
+static int reads(const sss_material *mat, const field *f)
+{
+	if (f->profile >= 0 && f->profile != mat->kind)
+		return 0;
+	if (f->when == SSS__WHEN_TRANSMITS)
+		return mat->transmission != SSS_TRANSMISSION_OFF;
+	if (f->when == SSS__WHEN_ALBEDO)
+		return mat->burley_mapping >= SSS_BURLEY_RANDOM_WALK;
+	return 1;
+}
+
+static sss_result check_gaussians(const sss_material *mat, char *errbuf,
+                                  size_t errbuf_len)
 {
 	int32_t idx = mat->pass_index;
-	if (mat->transmission < SSS_TRANSMISSION_OFF ||
-	    mat->transmission > SSS_TRANSMISSION_FAST)
-		return FAIL("material %d: unknown transmission model %d", idx,
-		            mat->transmission);
-	if (mat->transmission == SSS_TRANSMISSION_OFF)
-		return SSS_OK;
-	static const char rgb[3] = {'r', 'g', 'b'};
-	if (!in_range(mat->transmission_strength, 0.0f, 1.0f))
-		return FAIL("material %d: transmission_strength %g must be in "
-		            "[0, 1]", idx, (double)mat->transmission_strength);
+	int n = mat->gaussian_count;
+	if (n < 1 || n > SSS_MAX_GAUSSIANS)
+		return FAIL("material %d: gaussian_count %d must be 1..%d", idx, n,
+		            SSS_MAX_GAUSSIANS);
+	double sum[3] = {0, 0, 0};
+	for (int i = 0; i < n; i++) {
+		float v = mat->gaussian_variance[i];
+		if (!isfinite(v) || !(v > 0.0f) || v > (float)SSS__BIG)
+			return FAIL("material %d: gaussian_variance[%d] = %g must be "
+			            "> 0 (mm^2)", idx, i, (double)v);
+		for (int c = 0; c < 3; c++) {
+			float w = mat->gaussian_weight[i][c];
+			if (!isfinite(w) || !(w >= 0.0f) || w > (float)SSS__BIG)
+				return FAIL("material %d: gaussian_weight[%d].%c = %g must "
+				            "be >= 0", idx, i, "rgb"[c], (double)w);
+			sum[c] += w;
+		}
+	}
 	for (int c = 0; c < 3; c++)
-		if (!in_range(mat->transmission_color[c], 0.0f, 1.0f))
-			return FAIL("material %d: transmission_color.%c = %g must be "
-			            "in [0, 1]", idx, rgb[c],
-			            (double)mat->transmission_color[c]);
-	if (!in_range(mat->transmission_distance, 0.0f, 1e30f) ||
-	    !(mat->transmission_distance > 0.0f))
-		return FAIL("material %d: transmission_distance %g must be > 0 "
-		            "(metres)", idx, (double)mat->transmission_distance);
-	if (!in_range(mat->transmission_translucency, 0.0f, 1.0f))
-		return FAIL("material %d: transmission_translucency %g must be in "
-		            "[0, 1]", idx, (double)mat->transmission_translucency);
-	if (!in_range(mat->transmission_distortion, 0.0f, 1.0f))
-		return FAIL("material %d: transmission_distortion %g must be in "
-		            "[0, 1]", idx, (double)mat->transmission_distortion);
-	if (!in_range(mat->transmission_power, 0.0f, 1e30f) ||
-	    !(mat->transmission_power > 0.0f))
-		return FAIL("material %d: transmission_power %g must be > 0", idx,
-		            (double)mat->transmission_power);
-	if (!in_range(mat->transmission_scale, 0.0f, 1e30f))
-		return FAIL("material %d: transmission_scale %g must be >= 0", idx,
-		            (double)mat->transmission_scale);
-	if (!in_range(mat->transmission_ambient, 0.0f, 1e30f))
-		return FAIL("material %d: transmission_ambient %g must be >= 0",
-		            idx, (double)mat->transmission_ambient);
-	if (!in_range(mat->thickness_scale, 0.0f, 1e30f))
-		return FAIL("material %d: thickness_scale %g must be >= 0", idx,
-		            (double)mat->thickness_scale);
-	if (!in_range(mat->transmission_baked_scale, 0.0f, 1e30f))
-		return FAIL("material %d: transmission_baked_scale %g must be >= "
-		            "0", idx, (double)mat->transmission_baked_scale);
+		if (!(sum[c] > 0.0))
+			return FAIL("material %d: gaussian weights of channel %d sum "
+			            "to 0", idx, c);
 	return SSS_OK;
 }
 
@@ -158,96 +232,21 @@ sss_result sss_material_validate(const sss_material *mat, char *errbuf,
 	if (idx < 1 || idx > 65535)
 		return FAIL("material pass_index %d must be 1..65535 (0 means "
 		            "'no material' and is never scattered)", idx);
-	if (mat->kind < SSS_PROFILE_NONE || mat->kind > SSS_PROFILE_NEAR_FAR)
+	int known = 0;
+	for (int j = 0; j < SSS__COUNT(sss__profile_names); j++)
+		known |= sss__profile_names[j].value == mat->kind;
+	if (!known)
 		return FAIL("material %d: unknown profile kind %d", idx, mat->kind);
-	if (!in_range(mat->strength, 0.0f, 1.0f))
-		return FAIL("material %d: strength %g must be in [0, 1]", idx,
-		            (double)mat->strength);
-	if (mat->texturing != SSS_TEXTURING_POST &&
-	    mat->texturing != SSS_TEXTURING_PRE_AND_POST)
-		return FAIL("material %d: unknown texturing mode %d", idx,
-		            mat->texturing);
-	if (mat->taps < 0 || mat->taps > 4097)
-		return FAIL("material %d: taps %d must be 0 (default) or 1..4097",
-		            idx, mat->taps);
-
-	if ((r = check_transmission(mat, errbuf, errbuf_len)))
-		return r;
-	if (mat->calibration < SSS_CALIBRATION_NONE ||
-	    mat->calibration > SSS_CALIBRATION_CYCLES4_RANDOM_WALK)
-		return FAIL("material %d: unknown calibration %d", idx,
-		            mat->calibration);
-
-	switch (mat->kind) {
-	case SSS_PROFILE_BURLEY:
-		if ((r = check3(mat->radius, 0.0f, 1e30f, 0, "radius", idx, errbuf,
-		                errbuf_len)))
-			return r;
-		if (mat->burley_mapping < SSS_BURLEY_CYCLES ||
-		    mat->burley_mapping > SSS_BURLEY_CYCLES4_RANDOM_WALK)
-			return FAIL("material %d: unknown burley_mapping %d", idx,
-			            mat->burley_mapping);
-		if (mat->burley_mapping >= SSS_BURLEY_RANDOM_WALK &&
-		    (r = check3(mat->albedo, 0.0f, 1.0f, 0, "albedo", idx, errbuf,
-		                errbuf_len)))
-			return r;
-		break;
-	case SSS_PROFILE_GAUSSIANS: {
-		int n = mat->gaussian_count;
-		if (n < 1 || n > SSS_MAX_GAUSSIANS)
-			return FAIL("material %d: gaussian_count %d must be 1..%d", idx,
-			            n, SSS_MAX_GAUSSIANS);
-		if (!in_range(mat->gaussian_scale, 0.0f, 1e30f))
-			return FAIL("material %d: gaussian_scale %g must be >= 0", idx,
-			            (double)mat->gaussian_scale);
-		double sum[3] = {0, 0, 0};
-		for (int i = 0; i < n; i++) {
-			float v = mat->gaussian_variance[i];
-			if (!in_range(v, 0.0f, 1e30f) || v <= 0.0f)
-				return FAIL("material %d: gaussian_variance[%d] = %g must "
-				            "be > 0 (mm^2)", idx, i, (double)v);
-			char field[32];
-			snprintf(field, sizeof field, "gaussian_weight[%d]", i);
-			if ((r = check3(mat->gaussian_weight[i], 0.0f, 1e30f, 0, field,
-			                idx, errbuf, errbuf_len)))
+	/* The enums first: what the others mean depends on them. */
+	for (int pass = 0; pass < 2; pass++)
+		for (int k = 0; k < SSS__COUNT(fields); k++)
+			if ((fields[k].type == SSS_FIELD_ENUM) == !pass &&
+			    reads(mat, &fields[k]) &&
+			    (r = check_field(mat, &fields[k], errbuf, errbuf_len)))
 				return r;
-			for (int c = 0; c < 3; c++)
-				sum[c] += mat->gaussian_weight[i][c];
-		}
-		for (int c = 0; c < 3; c++)
-			if (!(sum[c] > 0.0))
-				return FAIL("material %d: gaussian weights of channel %d "
-				            "sum to 0", idx, c);
-		break;
-	}
-	case SSS_PROFILE_JIMENEZ:
-		if (!in_range(mat->jimenez_width, 0.0f, 1e30f))
-			return FAIL("material %d: jimenez_width %g must be >= 0 (m)",
-			            idx, (double)mat->jimenez_width);
-		if ((r = check3(mat->jimenez_strength, 0.0f, 1.0f, 0,
-		                "jimenez_strength", idx, errbuf, errbuf_len)))
-			return r;
-		if ((r = check3(mat->jimenez_falloff, 0.0f, 1e30f, 1,
-		                "jimenez_falloff", idx, errbuf, errbuf_len)))
-			return r;
-		break;
-	case SSS_PROFILE_NEAR_FAR:
-		if (!in_range(mat->scatter_scale, 0.0f, 1e30f))
-			return FAIL("material %d: scatter_scale %g must be >= 0", idx,
-			            (double)mat->scatter_scale);
-		if (!in_range(mat->near_far_balance, 0.0f, 1.0f))
-			return FAIL("material %d: near_far_balance %g must be in "
-			            "[0, 1]", idx, (double)mat->near_far_balance);
-		if ((r = check3(mat->near_sigma, 0.0f, 1e30f, 1, "near_sigma", idx,
-		                errbuf, errbuf_len)))
-			return r;
-		if ((r = check3(mat->far_sigma, 0.0f, 1e30f, 1, "far_sigma", idx,
-		                errbuf, errbuf_len)))
-			return r;
-		break;
-	default:
-		break;
-	}
+	if (mat->kind == SSS_PROFILE_GAUSSIANS &&
+	    (r = check_gaussians(mat, errbuf, errbuf_len)))
+		return r;
 	return SSS_OK;
 }
 

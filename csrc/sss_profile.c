@@ -431,7 +431,7 @@ sss_result sss_material_support(const sss_material *mat, double *metres)
 	if (r)
 		return r;
 	double support = 0.0;
-	int32_t taps = odd_taps(mat->taps > 0 ? mat->taps : 33);
+	int32_t taps = odd_taps(mat->taps > 0 ? mat->taps : SSS_DEFAULT_TAPS);
 	for (int c = 0; c < 3 && mat->kind != SSS_PROFILE_NONE; c++) {
 		channel ch;
 		double s = channel_make(mat, c, 1.0, taps, &ch);

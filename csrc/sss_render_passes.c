@@ -1,14 +1,13 @@
 /* sss_render_passes.c - Blender's render passes in a multilayer EXR: which
  * view layer holds the render, which of its passes libsss reads and what
  * to tell the artist when one is missing. Works on the sss_exr public API
- * (sss_exr.c does the file format); sss_process.c runs it per frame. */
+ * (sss_exr*.c do the file format); sss_process.c runs it per frame. */
 #include "sss_internal.h"
 
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
-#define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
 /* Appends printf output to a fixed buffer, truncating quietly. */
 static void append(char *buf, size_t cap, const char *fmt, ...)
@@ -97,9 +96,21 @@ static int32_t find_run(const char *components, const char *run)
 	return -1;
 }
 
-#define BLENDER_HINT "in Blender enable View Layer Properties > Passes > " \
-	"Light > Diffuse: Direct, Indirect, Color and Passes > Data: Z, " \
-	"Material Index"
+/* "in Blender enable View Layer Properties > Passes > Light > Diffuse:
+ * Direct; ...": where each pass of the given need is turned on. */
+static void blender_hint(int32_t need, char *buf, size_t cap)
+{
+	buf[0] = '\0';
+	append(buf, cap, "in Blender enable View Layer Properties > Passes > ");
+	int first = 1;
+	for (int32_t t = 0; t < sss__render_pass_count; t++) {
+		if (sss__render_passes[t].need != need)
+			continue;
+		append(buf, cap, "%s%s", first ? "" : "; ",
+		       sss__render_passes[t].hint);
+		first = 0;
+	}
+}
 
 /* The layer to read: as named, or the first (in file order) with DiffDir
  * that is not the back-light layer (transmission's, SSS_BACKLIGHT_LAYER);
@@ -123,29 +134,8 @@ sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
                                  sss_passes *passes, const char **layer_used,
                                  char *errbuf, size_t errbuf_len)
 {
-	static const struct {
-		const char *name;
-		size_t offset;   /* of the sss_image in sss_passes */
-		const char *run; /* components needed, in order */
-		const char *alt; /* or this single component */
-		int required;
-	} table[] = {
-		{"DiffDir", offsetof(sss_passes, diff_dir), "RGB", NULL, 1},
-		{"DiffInd", offsetof(sss_passes, diff_ind), "RGB", NULL, 0},
-		{"DiffCol", offsetof(sss_passes, diff_col), "RGB", NULL, 1},
-		{"GlossDir", offsetof(sss_passes, gloss_dir), "RGB", NULL, 0},
-		{"GlossInd", offsetof(sss_passes, gloss_ind), "RGB", NULL, 0},
-		{"GlossCol", offsetof(sss_passes, gloss_col), "RGB", NULL, 0},
-		{"TransDir", offsetof(sss_passes, trans_dir), "RGB", NULL, 0},
-		{"TransInd", offsetof(sss_passes, trans_ind), "RGB", NULL, 0},
-		{"TransCol", offsetof(sss_passes, trans_col), "RGB", NULL, 0},
-		{"Emit", offsetof(sss_passes, emit), "RGB", NULL, 0},
-		{"Env", offsetof(sss_passes, env), "RGB", NULL, 0},
-		{"Combined", offsetof(sss_passes, combined), "RGBA", NULL, 0},
-		{"Depth", offsetof(sss_passes, depth), "Z", "V", 1},
-		{"IndexMA", offsetof(sss_passes, index_ma), "X", "V", 1},
-		{"Position", offsetof(sss_passes, position), "XYZ", NULL, 0},
-	};
+	char hint[400];
+	blender_hint(SSS_PASS_REQUIRED, hint, sizeof hint);
 	char layers[1024] = "";
 	if (errbuf && errbuf_len)
 		errbuf[0] = '\0';
@@ -164,54 +154,57 @@ sss_result sss_exr_render_passes(const sss_exr *exr, const char *layer,
 			return FAILX(SSS_ERR_MISSING_PASS, "%s: no layer '%s'; layers "
 			             "in the file: %s", path, layer, layers);
 		return FAILX(SSS_ERR_MISSING_PASS, "%s: no layer has a DiffDir "
-		             "pass; layers in the file: %s; " BLENDER_HINT, path,
-		             layers);
+		             "pass; layers in the file: %s; %s", path, layers, hint);
 	}
 
 	char missing[256] = "";
-	for (size_t t = 0; t < sizeof table / sizeof *table; t++) {
+	for (int32_t t = 0; t < sss__render_pass_count; t++) {
+		const sss__pass_row *row = &sss__render_passes[t];
 		const char *components;
 		sss_image view;
-		if (!find_pass(exr, use, table[t].name, &components, &view)) {
-			if (table[t].required)
+		if (!find_pass(exr, use, row->name, &components, &view)) {
+			if (row->need == SSS_PASS_REQUIRED)
 				append(missing, sizeof missing, "%s%s",
-				       missing[0] ? ", " : "", table[t].name);
+				       missing[0] ? ", " : "", row->name);
 			continue;
 		}
-		int32_t at = find_run(components, table[t].run);
-		if (at < 0 && table[t].alt)
-			at = find_run(components, table[t].alt);
-		if (at < 0 && strcmp(table[t].name, "Combined") == 0)
+		int32_t at = find_run(components, row->components);
+		if (at < 0 && row->alt)
+			at = find_run(components, row->alt);
+		if (at < 0 && strcmp(row->name, "Combined") == 0)
 			continue; /* RGB only: its alpha is what libsss would use */
 		if (at < 0) {
 			memset(passes, 0, sizeof *passes);
 			return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s': pass %s "
 			             "has components '%s' but needs %s%s%s", path, use,
-			             table[t].name, components, table[t].run,
-			             table[t].alt ? " or " : "",
-			             table[t].alt ? table[t].alt : "");
+			             row->name, components, row->components,
+			             row->alt ? " or " : "", row->alt ? row->alt : "");
 		}
 		view.data += at;
-		*(sss_image *)((char *)passes + table[t].offset) = view;
+		*(sss_image *)(void *)((char *)passes + row->offset) = view;
 	}
 	if (missing[0]) {
 		memset(passes, 0, sizeof *passes);
 		describe_layers(exr, layers, sizeof layers);
 		return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s' has no %s pass%s"
-		             "; layers in the file: %s; " BLENDER_HINT, path, use,
-		             missing, strchr(missing, ',') ? "es" : "", layers);
+		             "; layers in the file: %s; %s", path, use, missing,
+		             strchr(missing, ',') ? "es" : "", layers, hint);
 	}
 	/* Blender stamps a Cycles render's header with "cycles.<layer>.samples"
 	 * and the like (EEVEE has no DiffInd pass, Cycles always can). */
 	char cycles[300];
 	snprintf(cycles, sizeof cycles, "cycles.%s.", use);
-	if (!passes->diff_ind.data && sss__exr_has_attribute_prefix(exr, cycles)) {
+	for (int32_t t = 0; t < sss__render_pass_count; t++) {
+		const sss__pass_row *row = &sss__render_passes[t];
+		if (row->need != SSS_PASS_CYCLES ||
+		    ((sss_image *)(void *)((char *)passes + row->offset))->data ||
+		    !sss__exr_has_attribute_prefix(exr, cycles))
+			continue;
 		memset(passes, 0, sizeof *passes);
 		return FAILX(SSS_ERR_MISSING_PASS, "%s: layer '%s' is a Cycles "
-		             "render without a DiffInd pass: its indirect diffuse "
-		             "light would be lost; in Blender enable View Layer "
-		             "Properties > Passes > Light > Diffuse: Indirect",
-		             path, use);
+		             "render without a %s pass: its light would be lost; "
+		             "in Blender enable View Layer Properties > Passes > %s",
+		             path, use, row->name, row->hint);
 	}
 	if (layer_used)
 		*layer_used = use;

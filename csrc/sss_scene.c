@@ -1,6 +1,7 @@
 /* sss_scene.c - the JSON scene description (docs/scene.md): camera, unit
  * scale, options and the material table, checked so that a loaded scene is
  * always accepted by sss_apply. */
+#include "sss_fields.h"
 #include "sss_internal.h"
 
 #include <cJSON.h>
@@ -41,8 +42,10 @@ typedef struct ctx {
 	int warn_full;    /* truncated: later warnings are dropped */
 } ctx;
 
-#define FAIL(c, ...) sss__fail((c)->err, (c)->err_len, \
-                               SSS_ERR_INVALID_ARGUMENT, __VA_ARGS__)
+/* The reader's failure: SSS_ERR_INVALID_ARGUMENT into the context's
+ * errbuf (FAIL and FAILX, sss_internal.h, take a function's own). */
+#define PARSE_FAIL(c, ...) sss__fail((c)->err, (c)->err_len, \
+                                     SSS_ERR_INVALID_ARGUMENT, __VA_ARGS__)
 
 /* Appends one line to warnbuf; when it no longer fits, what fits is kept
  * and the buffer ends in "..." so that the cut is visible. */
@@ -120,8 +123,8 @@ static sss_result type_error(ctx *c, const char *path, const char *expected,
                              const cJSON *it)
 {
 	char buf[32];
-	return FAIL(c, "%s: expected %s, got %s", path, expected,
-	            describe(it, buf, sizeof buf));
+	return PARSE_FAIL(c, "%s: expected %s, got %s", path, expected,
+	                  describe(it, buf, sizeof buf));
 }
 
 /* dst = a b c, cut to PATH_LEN - 1 bytes (known key paths are short). */
@@ -153,8 +156,8 @@ static void join_index(char *dst, const char *path, int i)
  *
  * Each JSON object is read through one table of its keys: the key, where
  * its value goes in the struct being filled and what it may hold. A new
- * field is one line in its table (plus, for a material, its default and
- * its check in sss_material.c). */
+ * field is one line in its table; a material's is one line of
+ * SSS_MATERIAL_FIELDS (sss_fields.h). */
 
 /* Allowed numbers: [lo, hi], lo excluded when lo_open. */
 typedef struct span {
@@ -179,10 +182,7 @@ enum field_type {
 	FIELD_SPECIAL  /* read by the object's own code */
 };
 
-typedef struct name_value {
-	const char *name;
-	int32_t value;
-} name_value;
+typedef sss__name_value name_value;
 
 typedef struct field {
 	const char *key;
@@ -218,7 +218,7 @@ static sss_result scan(ctx *c, const cJSON *obj, const char *path,
 		} else if (found[k]) {
 			char p[PATH_LEN];
 			join(p, path, fields[k].key);
-			return FAIL(c, "%s: key given twice", p);
+			return PARSE_FAIL(c, "%s: key given twice", p);
 		} else {
 			found[k] = it;
 		}
@@ -235,17 +235,19 @@ static sss_result get_f64(ctx *c, const cJSON *it, const char *path,
 		return type_error(c, path, "a number", it);
 	double v = it->valuedouble;
 	if (!isfinite(v)) /* JSON has no NaN; 1e999 overflows to Inf */
-		return FAIL(c, "%s: number out of range (overflows a double)", path);
+		return PARSE_FAIL(c, "%s: number out of range (overflows a double)",
+		                  path);
 	if (v < s.lo || (s.lo_open && v <= s.lo) || v > s.hi) {
 		/* 1e30 and up is "no upper bound" unless it is what was hit. */
 		if (s.hi < 1e30)
-			return FAIL(c, "%s: %g is out of range (must be in %c%g, %g])",
-			            path, v, s.lo_open ? '(' : '[', s.lo, s.hi);
+			return PARSE_FAIL(c, "%s: %g is out of range (must be in "
+			                  "%c%g, %g])", path, v, s.lo_open ? '(' : '[',
+			                  s.lo, s.hi);
 		if (v > s.hi)
-			return FAIL(c, "%s: %g is out of range (must be <= %g)", path,
-			            v, s.hi);
-		return FAIL(c, "%s: %g is out of range (must be %s %g)", path, v,
-		            s.lo_open ? ">" : ">=", s.lo);
+			return PARSE_FAIL(c, "%s: %g is out of range (must be <= %g)", path,
+			                  v, s.hi);
+		return PARSE_FAIL(c, "%s: %g is out of range (must be %s %g)", path, v,
+		                  s.lo_open ? ">" : ">=", s.lo);
 	}
 	*out = v;
 	return SSS_OK;
@@ -259,11 +261,11 @@ static sss_result get_f32(ctx *c, const cJSON *it, const char *path,
 	if (r)
 		return r;
 	if (fabs(v) > FLT_MAX)
-		return FAIL(c, "%s: %g is too large for a 32-bit float", path, v);
+		return PARSE_FAIL(c, "%s: %g is too large for a 32-bit float", path, v);
 	float f = (float)v;
 	if (s.lo_open && !(f > s.lo))
-		return FAIL(c, "%s: %g is too small (it rounds to %g as a 32-bit "
-		            "float)", path, v, (double)f);
+		return PARSE_FAIL(c, "%s: %g is too small (it rounds to %g as a 32-bit "
+		                  "float)", path, v, (double)f);
 	*out = f;
 	return SSS_OK;
 }
@@ -275,13 +277,13 @@ static sss_result get_int(ctx *c, const cJSON *it, const char *path,
 		return type_error(c, path, "an integer", it);
 	double v = it->valuedouble;
 	if (!isfinite(v) || v != floor(v))
-		return FAIL(c, "%s: expected an integer, got %g", path, v);
+		return PARSE_FAIL(c, "%s: expected an integer, got %g", path, v);
 	if (v < lo || v > hi) {
 		if (hi == INT32_MAX && v < lo)
-			return FAIL(c, "%s: %g is out of range (must be >= %d)", path,
-			            v, lo);
-		return FAIL(c, "%s: %g is out of range (must be %d..%d)", path, v,
-		            lo, hi);
+			return PARSE_FAIL(c, "%s: %g is out of range (must be >= %d)", path,
+			                  v, lo);
+		return PARSE_FAIL(c, "%s: %g is out of range (must be %d..%d)", path, v,
+		                  lo, hi);
 	}
 	*out = (int32_t)v;
 	return SSS_OK;
@@ -322,8 +324,8 @@ static sss_result get_enum(ctx *c, const cJSON *it, const char *path,
 		snprintf(list + used, sizeof list - used, "%s%s", i ? ", " : "",
 		         tab[i].name);
 	}
-	return FAIL(c, "%s: unknown %s '%s' (expected %s)", path, what,
-	            printable(it->valuestring, buf, sizeof buf), list);
+	return PARSE_FAIL(c, "%s: unknown %s '%s' (expected %s)", path, what,
+	                  printable(it->valuestring, buf, sizeof buf), list);
 }
 
 static const name_value camera_types[] = {
@@ -333,39 +335,11 @@ static const name_value sensor_fits[] = {
 	{"AUTO", SSS_SENSOR_FIT_AUTO}, {"HORIZONTAL", SSS_SENSOR_FIT_HORIZONTAL},
 	{"VERTICAL", SSS_SENSOR_FIT_VERTICAL},
 };
-static const name_value profiles[] = {
-	{"burley", SSS_PROFILE_BURLEY}, {"gaussians", SSS_PROFILE_GAUSSIANS},
-	{"jimenez", SSS_PROFILE_JIMENEZ}, {"near-far", SSS_PROFILE_NEAR_FAR},
-	{"none", SSS_PROFILE_NONE},
-};
-static const name_value mappings[] = {
-	{"cycles", SSS_BURLEY_CYCLES}, {"eevee", SSS_BURLEY_EEVEE},
-	{"random-walk", SSS_BURLEY_RANDOM_WALK},
-	{"cycles-random-walk", SSS_BURLEY_CYCLES_RANDOM_WALK},
-	{"cycles4-random-walk", SSS_BURLEY_CYCLES4_RANDOM_WALK},
-};
-static const name_value calibrations[] = {
-	{"none", SSS_CALIBRATION_NONE},
-	{"cycles-random-walk", SSS_CALIBRATION_CYCLES_RANDOM_WALK},
-	{"cycles4-random-walk-skin", SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN},
-	{"cycles4-random-walk", SSS_CALIBRATION_CYCLES4_RANDOM_WALK},
-};
-static const name_value transmissions[] = {
-	{"off", SSS_TRANSMISSION_OFF}, {"burley", SSS_TRANSMISSION_BURLEY},
-	{"jimenez", SSS_TRANSMISSION_JIMENEZ},
-	{"beer-lambert", SSS_TRANSMISSION_BEER_LAMBERT},
-	{"fast", SSS_TRANSMISSION_FAST},
-};
-static const name_value texturings[] = {
-	{"post", SSS_TEXTURING_POST},
-	{"pre-and-post", SSS_TEXTURING_PRE_AND_POST},
-};
-
 static const char *profile_name(int32_t kind)
 {
-	for (int i = 0; i < COUNT(profiles); i++)
-		if (profiles[i].value == kind)
-			return profiles[i].name;
+	for (int i = 0; i < COUNT(sss__profile_names); i++)
+		if (sss__profile_names[i].value == kind)
+			return sss__profile_names[i].name;
 	return "?";
 }
 
@@ -468,79 +442,36 @@ static sss_result parse_camera(ctx *c, const cJSON *obj, sss_camera *cam)
 	                                  (span)POSITIVE, &clip_end)))
 		return r;
 	if (f[C_CLIP_START] && f[C_CLIP_END] && !(clip_end > clip_start))
-		return FAIL(c, "camera.clip_end: %g must be greater than "
-		            "camera.clip_start (%g)", clip_end, clip_start);
+		return PARSE_FAIL(c, "camera.clip_end: %g must be greater than "
+		                  "camera.clip_start (%g)", clip_end, clip_start);
 	return SSS_OK;
 }
 
 /* ---------------------------------------------------------- materials */
 
-/* The keys of a "materials" entry. .profile: the profile a key belongs to
- * (-1: every profile reads it); another profile's keys are warned about
- * and ignored. */
-#define MAT(k, p, t, member) .key = k, .profile = p, .type = t, \
-                             .offset = AT(sss_material, member)
-#define ALL (-1)
-#define BURLEY SSS_PROFILE_BURLEY
-#define GAUSS SSS_PROFILE_GAUSSIANS
-#define JIMENEZ SSS_PROFILE_JIMENEZ
-#define NEARFAR SSS_PROFILE_NEAR_FAR
+/* The keys of a "materials" entry: the four read by parse_material
+ * itself, then the schema (sss_fields.h). .profile: the profile a key
+ * belongs to (-1: every profile reads it); another profile's keys are
+ * warned about and ignored. */
+#define ROW(...) ROW_(__VA_ARGS__)
+#define ROW_(k, member, t, p, when, d0, d1, d2, lo_, hi_, lo_open, names_, \
+            count, help) \
+	{.key = k, .profile = SSS__P_##p, .type = FIELD_##t, \
+	 .offset = AT(sss_material, member), .range = {lo_, hi_, lo_open}, \
+	 .lo = (int32_t)((hi_) < 1e9 ? (lo_) : 0), \
+	 .hi = (int32_t)((hi_) < 1e9 ? (hi_) : 0), .what = k, \
+	 .names = names_, .name_count = count},
 static const field material_fields[] = {
-	{.key = "pass_index", .profile = ALL, .type = FIELD_SPECIAL},
-	{.key = "name", .profile = ALL, .type = FIELD_SPECIAL},
-	{.key = "profile", .profile = ALL, .type = FIELD_SPECIAL},
-	{MAT("strength", ALL, FIELD_F32, strength), .range = UNIT},
-	{MAT("texturing", ALL, FIELD_ENUM, texturing),
-	 ENUM(texturings, "texturing")},
-	{MAT("taps", ALL, FIELD_INT, taps), .lo = 0, .hi = 4097},
-	{MAT("radius", BURLEY, FIELD_VEC3, radius), .range = NONNEG_F},
-	{MAT("mapping", BURLEY, FIELD_ENUM, burley_mapping),
-	 ENUM(mappings, "mapping")},
-	{MAT("albedo", BURLEY, FIELD_VEC3, albedo), .range = UNIT},
-	{.key = "gaussians", .profile = GAUSS, .type = FIELD_SPECIAL},
-	{MAT("scale", GAUSS, FIELD_F32, gaussian_scale), .range = NONNEG_F},
-	{MAT("width", JIMENEZ, FIELD_F32, jimenez_width), .range = NONNEG_F},
-	{MAT("strength_rgb", JIMENEZ, FIELD_VEC3, jimenez_strength),
-	 .range = UNIT},
-	{MAT("falloff", JIMENEZ, FIELD_VEC3, jimenez_falloff),
-	 .range = POSITIVE_F},
-	{MAT("scatter_scale", NEARFAR, FIELD_F32, scatter_scale),
-	 .range = NONNEG_F},
-	{MAT("balance", NEARFAR, FIELD_F32, near_far_balance), .range = UNIT},
-	{MAT("near_sigma", NEARFAR, FIELD_VEC3, near_sigma),
-	 .range = POSITIVE_F},
-	{MAT("far_sigma", NEARFAR, FIELD_VEC3, far_sigma), .range = POSITIVE_F},
-	{MAT("transmission", ALL, FIELD_ENUM, transmission),
-	 ENUM(transmissions, "transmission model")},
-	{MAT("transmission_strength", ALL, FIELD_F32, transmission_strength),
-	 .range = UNIT},
-	{MAT("transmission_color", ALL, FIELD_VEC3, transmission_color),
-	 .range = UNIT},
-	{MAT("transmission_distance", ALL, FIELD_F32, transmission_distance),
-	 .range = POSITIVE_F},
-	{MAT("transmission_translucency", ALL, FIELD_F32,
-	     transmission_translucency), .range = UNIT},
-	{MAT("transmission_distortion", ALL, FIELD_F32,
-	     transmission_distortion), .range = UNIT},
-	{MAT("transmission_power", ALL, FIELD_F32, transmission_power),
-	 .range = POSITIVE_F},
-	{MAT("transmission_scale", ALL, FIELD_F32, transmission_scale),
-	 .range = NONNEG_F},
-	{MAT("transmission_ambient", ALL, FIELD_F32, transmission_ambient),
-	 .range = NONNEG_F},
-	{MAT("transmission_baked_scale", ALL, FIELD_F32,
-	     transmission_baked_scale), .range = NONNEG_F},
-	{MAT("thickness_scale", ALL, FIELD_F32, thickness_scale),
-	 .range = NONNEG_F},
-	{MAT("calibration", ALL, FIELD_ENUM, calibration),
-	 ENUM(calibrations, "calibration")},
+	{.key = "pass_index", .profile = -1, .type = FIELD_SPECIAL},
+	{.key = "name", .profile = -1, .type = FIELD_SPECIAL},
+	{.key = "profile", .profile = -1, .type = FIELD_SPECIAL},
+	{.key = "gaussians", .profile = SSS_PROFILE_GAUSSIANS,
+	 .type = FIELD_SPECIAL},
+	SSS_MATERIAL_FIELDS(ROW)
 };
-#undef ALL
-#undef BURLEY
-#undef GAUSS
-#undef JIMENEZ
-#undef NEARFAR
-enum { M_PASS_INDEX, M_NAME, M_PROFILE, M_GAUSSIANS = 9,
+#undef ROW
+#undef ROW_
+enum { M_PASS_INDEX, M_NAME, M_PROFILE, M_GAUSSIANS,
        M_COUNT = COUNT(material_fields) };
 
 static const field gaussian_fields[2] = {
@@ -554,9 +485,9 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 	int n = cJSON_IsArray(arr) ? cJSON_GetArraySize(arr) : -1;
 	if (n < 1 || n > SSS_MAX_GAUSSIANS) {
 		char buf[32];
-		return FAIL(c, "%s: expected an array of 1 to %d objects "
-		            "{\"variance\", \"weight\"}, got %s", path,
-		            SSS_MAX_GAUSSIANS, describe(arr, buf, sizeof buf));
+		return PARSE_FAIL(c, "%s: expected an array of 1 to %d objects "
+		                  "{\"variance\", \"weight\"}, got %s", path,
+		                  SSS_MAX_GAUSSIANS, describe(arr, buf, sizeof buf));
 	}
 	/* Rows beyond the given ones are cleared, not left at the default
 	 * skin's values, so the struct shows exactly what the file says. */
@@ -576,7 +507,7 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 		for (int k = 0; k < 2; k++) {
 			join(p, gp, gaussian_fields[k].key);
 			if (!f[k])
-				return FAIL(c, "%s: missing (required)", p);
+				return PARSE_FAIL(c, "%s: missing (required)", p);
 			r = k == 0 ? get_f32(c, f[k], p, (span)POSITIVE_F,
 			                     &m->gaussian_variance[i])
 			           : get_vec3(c, f[k], p, (span)NONNEG_F,
@@ -593,8 +524,9 @@ static sss_result parse_gaussians(ctx *c, const cJSON *arr, const char *path,
 		for (int k = 0; k < n; k++)
 			sum += m->gaussian_weight[k][ch];
 		if (!(sum > 0.0))
-			return FAIL(c, "%s: the weights of channel %c sum to 0 (every "
-			            "channel needs some weight)", path, rgb[ch]);
+			return PARSE_FAIL(c, "%s: the weights of channel %c sum to 0 "
+			                  "(every channel needs some weight)", path,
+			                  rgb[ch]);
 	}
 	return SSS_OK;
 }
@@ -618,16 +550,16 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	int32_t kind = SSS_PROFILE_NONE;
 	join(p, mp, "profile");
 	if (!f[M_PROFILE])
-		return FAIL(c, "%s: missing (required: burley, gaussians, jimenez, "
-		            "near-far or none)", p);
-	if ((r = get_enum(c, f[M_PROFILE], p, "profile", profiles,
-	                  COUNT(profiles), &kind)))
+		return PARSE_FAIL(c, "%s: missing (required: burley, gaussians, "
+		                  "jimenez, near-far or none)", p);
+	if ((r = get_enum(c, f[M_PROFILE], p, "profile", sss__profile_names,
+	                  COUNT(sss__profile_names), &kind)))
 		return r;
 	sss_material_default(m, kind);
 
 	join(p, mp, "pass_index");
 	if (!f[M_PASS_INDEX])
-		return FAIL(c, "%s: missing (required, 1..65535)", p);
+		return PARSE_FAIL(c, "%s: missing (required, 1..65535)", p);
 	if ((r = get_int(c, f[M_PASS_INDEX], p, 1, 65535, &m->pass_index)))
 		return r;
 	int32_t pi = m->pass_index;
@@ -635,8 +567,8 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 		int32_t j = 0;
 		while (j < i && earlier[j].pass_index != pi)
 			j++;
-		return FAIL(c, "%s: %d is already used by materials[%d]", p, pi,
-		            (int)j);
+		return PARSE_FAIL(c, "%s: %d is already used by materials[%d]", p, pi,
+		                  (int)j);
 	}
 	used[pi >> 3] |= (uint8_t)(1u << (pi & 7));
 
@@ -666,7 +598,7 @@ static sss_result parse_material(ctx *c, const cJSON *obj, int32_t i,
 	 * always one sss_apply accepts. */
 	char msg[200];
 	if (sss_material_validate(m, msg, sizeof msg))
-		return FAIL(c, "%s: %s", mp, msg);
+		return PARSE_FAIL(c, "%s: %s", mp, msg);
 
 	/* Allocated last, so that no error path has to free it. */
 	char fallback[32];
@@ -686,8 +618,8 @@ static sss_result parse_materials(ctx *c, const cJSON *arr, sss_scene *sc)
 		return type_error(c, "materials", "an array of objects", arr);
 	int n = cJSON_GetArraySize(arr);
 	if (n > SCENE_MAX_MATERIALS)
-		return FAIL(c, "materials: %d entries, at most %d", n,
-		            SCENE_MAX_MATERIALS);
+		return PARSE_FAIL(c, "materials: %d entries, at most %d", n,
+		                  SCENE_MAX_MATERIALS);
 	sc->materials = calloc(n ? (size_t)n : 1, sizeof *sc->materials);
 	sc->names = calloc(n ? (size_t)n : 1, sizeof *sc->names);
 	uint8_t *used = calloc(65536 / 8, 1);
@@ -738,8 +670,8 @@ static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 {
 	if (!cJSON_IsObject(root)) {
 		char buf[32];
-		return FAIL(c, "expected a JSON object at the top level, got %s",
-		            describe(root, buf, sizeof buf));
+		return PARSE_FAIL(c, "expected a JSON object at the top level, got %s",
+		                  describe(root, buf, sizeof buf));
 	}
 	const cJSON *f[T_COUNT];
 	sss_result r = scan(c, root, "", top_fields, T_COUNT, f);
@@ -791,8 +723,8 @@ static sss_result syntax_error(ctx *c, const char *text, const char *at,
 		}
 	}
 	if (!*at)
-		return FAIL(c, "%s at line %d, column %d (at the end of the text)",
-		            what, line, col);
+		return PARSE_FAIL(c, "%s at line %d, column %d (at the end of the "
+		                  "text)", what, line, col);
 	char near[24], buf[48];
 	size_t n = 0;
 	while (at[n] && at[n] != '\n' && at[n] != '\r' && n + 1 < sizeof near) {
@@ -800,8 +732,8 @@ static sss_result syntax_error(ctx *c, const char *text, const char *at,
 		n++;
 	}
 	near[n] = '\0';
-	return FAIL(c, "%s at line %d, column %d (near '%s')", what, line, col,
-	            printable(near, buf, sizeof buf));
+	return PARSE_FAIL(c, "%s at line %d, column %d (near '%s')", what, line,
+	                  col, printable(near, buf, sizeof buf));
 }
 
 /* Values (numbers, strings, literals, arrays, objects; keys count as
@@ -846,9 +778,9 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 	if (out)
 		*out = NULL;
 	if (!out)
-		return FAIL(&c, "out is NULL");
+		return PARSE_FAIL(&c, "out is NULL");
 	if (!json && json_len)
-		return FAIL(&c, "JSON text is NULL");
+		return PARSE_FAIL(&c, "JSON text is NULL");
 
 	/* The text ends at json_len or at a NUL byte, whichever is first. A
 	 * terminated copy keeps cJSON off the end of a caller's buffer. */
@@ -865,7 +797,7 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 	cJSON *root = NULL;
 	sss_scene *sc = NULL;
 	if (!*skip_space(text)) {
-		r = FAIL(&c, "empty JSON text");
+		r = PARSE_FAIL(&c, "empty JSON text");
 		goto done;
 	}
 	/* Before cJSON sees it: a "\u0000" in a string would end that
@@ -880,8 +812,8 @@ sss_result sss_scene_parse(const char *json, size_t json_len,
 		goto done;
 	}
 	if (values > SCENE_MAX_VALUES) {
-		r = FAIL(&c, "more than %d JSON values (%lld); a scene "
-		         "description holds far fewer", SCENE_MAX_VALUES, values);
+		r = PARSE_FAIL(&c, "more than %d JSON values (%lld); a scene "
+		               "description holds far fewer", SCENE_MAX_VALUES, values);
 		goto done;
 	}
 	/* The end pointer, not cJSON_GetErrorPtr(): that one is global. */

@@ -77,7 +77,7 @@ void sss_options_default(sss_options *opt)
 	opt->struct_size = sizeof *opt;
 	opt->method = SSS_METHOD_AUTO;
 	opt->radius_scale = 1.0f;
-	opt->taps = 33;
+	opt->taps = SSS_DEFAULT_TAPS;
 	opt->num_threads = 0;
 	opt->background_depth = 1e9;
 	opt->max_support_px = 256;
@@ -117,6 +117,8 @@ size_t sss_struct_size(const char *name)
 		{"sss_exr_options", sizeof(sss_exr_options)},
 		{"sss_process_options", sizeof(sss_process_options)},
 		{"sss_timings", sizeof(sss_timings)},
+		{"sss_field_info", sizeof(sss_field_info)},
+		{"sss_pass_info", sizeof(sss_pass_info)},
 	};
 	if (!name)
 		return 0;

@@ -4,7 +4,7 @@
  * makes the same kind of zlib stream any reader inflates. The bytes are
  * prepared as OpenEXR's own ZIP does (internal_zip.c, apply_zip_impl and
  * undo_zip_impl): split into the even and the odd bytes, then each stored
- * as the difference to the one before, plus 128. sss_exr.c plugs these
+ * as the difference to the one before, plus 128. sss_exr_decode.c and sss_exr_encode.c plug these
  * into OpenEXRCore's encode and decode pipelines. */
 #include "sss_internal.h"
 

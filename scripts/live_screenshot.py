@@ -101,7 +101,7 @@ def viewer():
 def shoot_before():
     state["before"] = shoot("live-before.png")
     state["viewer"] = viewer()
-    found = pipeline.analyse(bpy.context.scene).found
+    found = pipeline.analyse(bpy.context.scene).materials
     state["material"] = found[0].material
     bpy.app.timers.register(drag, first_interval=0.2)
 

@@ -56,6 +56,24 @@ static void test_material_validation(void)
 		CHECK_STATUS("mat-default", SSS_OK, sss_material_validate(&m, err,
 		                                                        sizeof err));
 	}
+	/* "No upper bound" is 1e30 as a float holds it (1.0000000150e30). */
+	{
+		sss_material big;
+		sss_material_default(&big, SSS_PROFILE_BURLEY);
+		big.pass_index = 1;
+		big.radius[0] = 1e30f;
+		CHECK_STATUS("mat-radius-1e30", SSS_OK,
+		             sss_material_validate(&big, err, sizeof err));
+		big.radius[0] = 2e30f;
+		CHECK_STATUS("mat-radius-2e30", SSS_ERR_INVALID_ARGUMENT,
+		             sss_material_validate(&big, err, sizeof err));
+		sss_material_default(&big, SSS_PROFILE_GAUSSIANS);
+		big.pass_index = 1;
+		big.gaussian_variance[0] = 1e30f;
+		big.gaussian_weight[0][0] = 1e30f;
+		CHECK_STATUS("mat-gaussian-1e30", SSS_OK,
+		             sss_material_validate(&big, err, sizeof err));
+	}
 	sss_material m;
 
 #define BAD(id, kind, stmt, needle)                                          \
@@ -283,8 +301,30 @@ static void test_method_names(void)
 	}
 }
 
+/* The render passes' table: every sss_passes member up to position, each
+ * with its components and Blender's pass; the four the library needs. */
+static void test_render_passes(void)
+{
+	sss_pass_info info;
+	int32_t i = 0, required = 0;
+	for (; sss_render_pass(i, &info) == SSS_OK; i++) {
+		CHECK("pass-fields", info.name && info.components && info.blender &&
+		      info.hint && strlen(info.components) >= 1, "pass %d", i);
+		required += info.need == SSS_PASS_REQUIRED;
+	}
+	CHECK("pass-count", i == 15, "%d passes", i);
+	CHECK("pass-required", required == 4, "%d required", required);
+	CHECK_STATUS("pass-past-end", SSS_ERR_INVALID_ARGUMENT,
+	             sss_render_pass(i, &info));
+	CHECK_STATUS("pass-null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_render_pass(0, NULL));
+	CHECK("pass-size", sss_struct_size("sss_pass_info") == sizeof info,
+	      "size");
+}
+
 int main(void)
 {
+	test_render_passes();
 	test_status_tables();
 	test_method_names();
 	test_struct_sizes();

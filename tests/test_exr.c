@@ -1,4 +1,4 @@
-/* test_exr.c - EXR reading and writing (sss_exr.c). Input files are made
+/* test_exr.c - EXR reading and writing (sss_exr*.c). Input files are made
  * here with raw OpenEXRCore calls (planar buffers, the stored types), and
  * outputs are checked by decoding them the same way, so the library's
  * reader and writer are never their own oracle. */

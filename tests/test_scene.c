@@ -802,6 +802,108 @@ static void test_apply_accepts(void)
 	synth_free(s);
 }
 
+/* docs/scene.md's material tables against the library's schema: each
+ * field's row has its key, type, default, range and member as
+ * sss_material_field() gives them (the unit and the prose are the
+ * document's own). */
+static void doc_cells(const sss_field_info *f, int32_t i, char *type,
+                      char *def, char *range, size_t len)
+{
+	static const char *const types[] = {"number", "RGB", "integer",
+	                                    "string"};
+	snprintf(type, len, "%s", types[f->type]);
+	const double *d = f->default_value;
+	size_t used = 0;
+	switch (f->type) {
+	case SSS_FIELD_FLOAT:
+		snprintf(def, len, "%g", d[0]);
+		break;
+	case SSS_FIELD_RGB:
+		snprintf(def, len, "[%g, %g, %g]", d[0], d[1], d[2]);
+		break;
+	case SSS_FIELD_INT:
+		snprintf(def, len, "%d", (int)d[0]);
+		break;
+	default:
+		for (int32_t j = 0, v; sss_material_field_name(i, j, &v); j++)
+			if (v == (int32_t)d[0])
+				snprintf(def, len, "`\"%s\"`", sss_material_field_name(i, j,
+				                                                     NULL));
+		range[0] = '\0';
+		for (int32_t j = 0; j < f->name_count; j++) {
+			used = strlen(range);
+			snprintf(range + used, len - used, "%s`\"%s\"`", j ? ", " : "",
+			         sss_material_field_name(i, j, NULL));
+		}
+		return;
+	}
+	const char *each = f->type == SSS_FIELD_RGB ? "each " : "";
+	if (f->type == SSS_FIELD_INT || f->hi < 1e30)
+		snprintf(range, len, "%s%g .. %g", each, f->lo, f->hi);
+	else
+		snprintf(range, len, "%s%s %g", each, f->lo_open ? ">" : ">=",
+		         f->lo);
+}
+
+static int starts(const char *s, const char *prefix)
+{
+	return strncmp(s, prefix, strlen(prefix)) == 0;
+}
+
+static void test_doc_table(void)
+{
+	FILE *fp = fopen("docs/scene.md", "rb");
+	CHECK("doc-open", fp != NULL, "docs/scene.md (run from the repository)");
+	if (!fp)
+		return;
+	static char doc[1 << 17];
+	size_t n = fread(doc, 1, sizeof doc - 1, fp);
+	fclose(fp);
+	doc[n] = '\0';
+	/* Only the materials[] section: other objects reuse some keys. */
+	const char *section = strstr(doc, "### `materials[]`");
+	CHECK("doc-section", section != NULL, "no materials[] section");
+	if (!section)
+		return;
+	sss_field_info f;
+	int32_t i = 0;
+	for (; sss_material_field(i, &f) == SSS_OK; i++) {
+		char head[96], type[64], def[128], range[256], sets[96];
+		snprintf(head, sizeof head, "\n| `%s` | ", f.key);
+		const char *row = strstr(section, head);
+		CHECK(f.key, row != NULL, "docs/scene.md has no row for '%s'",
+		      f.key);
+		if (!row)
+			continue;
+		doc_cells(&f, i, type, def, range, sizeof range);
+		snprintf(sets, sizeof sets, "`%s`", f.member);
+		/* | key | type | unit | default | range | sets | */
+		const char *cell[6];
+		const char *p = row + 1;
+		int k = 0;
+		while (k < 6 && (p = strstr(p, "| ")) != NULL) {
+			cell[k++] = p + 2;
+			p += 2;
+		}
+		CHECK(f.key, k == 6, "row of '%s' has fewer than 6 cells", f.key);
+		if (k < 6)
+			continue;
+		CHECK(f.key, starts(cell[1], type), "type should read '%s'", type);
+		CHECK(f.key, starts(cell[3], def), "default should read '%s'", def);
+		CHECK(f.key, starts(cell[4], range), "range should read '%s'",
+		      range);
+		CHECK(f.key, starts(cell[5], sets), "sets should start with %s",
+		      sets);
+	}
+	CHECK("doc-count", i > 20, "%d fields", (int)i);
+	CHECK_STATUS("field-past-end", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_field(i, &f));
+	CHECK_STATUS("field-null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_field(0, NULL));
+	CHECK("field-name-past-end", !sss_material_field_name(0, 99, NULL),
+	      "a name past the end");
+}
+
 int main(void)
 {
 	test_full_scene();
@@ -812,5 +914,6 @@ int main(void)
 	test_accessors();
 	test_files();
 	test_apply_accepts();
+	test_doc_table();
 	return tu_finish("test_scene");
 }

@@ -28,7 +28,7 @@ class Found:
 
 @dataclass
 class Analysis:
-    found: list = field(default_factory=list)
+    materials: list = field(default_factory=list)  # Found, each scattering one
     emits: bool = False
     transmits: bool = False
     messages: list = field(default_factory=list)
@@ -119,7 +119,7 @@ def analyse(scene):
                               compat.method(node))
                 found.albedo = found.color
             if found:
-                result.found.append(found)
+                result.materials.append(found)
                 break  # one profile per material
     return result
 

@@ -55,8 +55,6 @@ if PRINCIPLED_V2:
         "specular": "Specular IOR Level",
         "roughness": "Roughness",
     }
-    # Specular IOR Level 0 removes the specular layer, like Specular 0.
-    SPECULAR_OFF = 0.0
 else:
     PRINCIPLED = {
         "base": "Base Color",
@@ -69,7 +67,9 @@ else:
         "specular": "Specular",
         "roughness": "Roughness",
     }
-    SPECULAR_OFF = 0.0
+# The "specular" input's value that removes the specular layer: Specular 0,
+# and from 4.0 Specular IOR Level 0 likewise.
+SPECULAR_OFF = 0.0
 
 # Blender's enum identifier for each method, by the names the add-on uses.
 METHODS = ("BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN")
@@ -336,6 +336,19 @@ def composite_input(tree, create=True, location=(0.0, 0.0)):
         if COMPOSITOR_IS_GROUP and not tree.interface.items_tree:
             new_group_socket(tree, 'OUTPUT', "NodeSocketColor", "Image")
     return node.inputs[0]
+
+
+def set_bilateral(node, size, threshold):
+    """A Bilateral Blur node's one pass of spatial size (pixels) and colour
+    threshold: properties up to 4.x, the Size and Threshold inputs in
+    5.0."""
+    if COMPOSITOR_IS_GROUP:
+        node.inputs["Size"].default_value = int(round(size))
+        node.inputs["Threshold"].default_value = threshold
+    else:
+        node.iterations = 1
+        node.sigma_space = size
+        node.sigma_color = threshold
 
 
 def set_file_output(node, directory, file_format="PNG", depth="8"):

@@ -124,7 +124,7 @@ def scene_description(scene, found):
         "method": method_name(scene.sss.method),
         "taps": scene.sss.taps | 1,
         "materials": [_with_baked(scene, f, material_entry(f))
-                      for f in found.found],
+                      for f in found.materials],
     }
 
 

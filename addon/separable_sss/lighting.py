@@ -1,7 +1,8 @@
 """Which scattering materials transmit light through thin parts, and
-what lights them from behind: with how thin their objects are
-(thickness.py), what decides if a render needs the back-light layer
-(transmission.wanted). Reads the scene only."""
+what lights them from behind: with how far the library says their light
+reaches through them (native.transmission_reach), what decides if a
+render needs the back-light layer (transmission.wanted). Reads the scene
+only."""
 import math
 
 from mathutils import Vector
@@ -33,7 +34,7 @@ def model(found):
 
 def transmitting(analysis):
     """The found materials whose transmission is on."""
-    return [f for f in analysis.found if model(f) != "OFF"]
+    return [f for f in analysis.materials if model(f) != "OFF"]
 
 
 def objects_with(scene, material):

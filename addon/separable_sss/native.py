@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 9  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 10  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -61,6 +61,22 @@ class Image(ctypes.Structure):
     _fields_ = [("data", ctypes.POINTER(ctypes.c_float)),
                 ("width", ctypes.c_int32), ("height", ctypes.c_int32),
                 ("channels", ctypes.c_int32), ("row_stride", ctypes.c_int64)]
+
+
+class FieldInfo(ctypes.Structure):
+    _fields_ = [("key", ctypes.c_char_p), ("member", ctypes.c_char_p),
+                ("type", ctypes.c_int32), ("profile", ctypes.c_int32),
+                ("transmits", ctypes.c_int32),
+                ("default_value", ctypes.c_double * 3),
+                ("lo", ctypes.c_double), ("hi", ctypes.c_double),
+                ("lo_open", ctypes.c_int32), ("name_count", ctypes.c_int32),
+                ("help", ctypes.c_char_p)]
+
+
+class PassInfo(ctypes.Structure):
+    _fields_ = [("name", ctypes.c_char_p), ("components", ctypes.c_char_p),
+                ("alt", ctypes.c_char_p), ("need", ctypes.c_int32),
+                ("blender", ctypes.c_char_p), ("hint", ctypes.c_char_p)]
 
 
 class Timings(ctypes.Structure):
@@ -160,6 +176,11 @@ def _declare(lib):
         "sss_transmission_slab": (c.c_int32, [c.c_void_p] +
                                   [c.POINTER(c.c_double)] * 3),
         "sss_method_name": (c.c_char_p, [c.c_int32]),
+        "sss_render_pass": (c.c_int32, [c.c_int32, c.POINTER(PassInfo)]),
+        "sss_material_field": (c.c_int32, [c.c_int32,
+                                           c.POINTER(FieldInfo)]),
+        "sss_material_field_name": (c.c_char_p, [c.c_int32, c.c_int32,
+                                                 c.POINTER(c.c_int32)]),
         "sss_method_summary": (c.c_char_p, [c.c_int32]),
         "sss_process_options_default": (None,
                                         [c.POINTER(ProcessOptions)]),
@@ -264,6 +285,58 @@ def methods():
         i = len(out)
         out.append((lib.sss_method_name(i).decode(),
                     lib.sss_method_summary(i).decode()))
+    return out
+
+
+PASS_NEEDS = ("optional", "required", "cycles")  # sss_pass_need's order
+
+
+def render_passes():
+    """[dict] of the render passes the library reads (sss_render_pass):
+    name (in the EXR), components, need (PASS_NEEDS), blender (the view
+    layer's use_pass_<blender>) and hint (where it is in Blender)."""
+    lib = library()
+    if lib.sss_struct_size(b"sss_pass_info") != ctypes.sizeof(PassInfo):
+        raise LibraryError(-1, "ABI", "sss_pass_info layout differs from "
+                           "the add-on's")
+    out, info = [], PassInfo()
+    while lib.sss_render_pass(len(out), ctypes.byref(info)) == 0:
+        out.append({"name": info.name.decode(),
+                    "components": info.components.decode(),
+                    "need": PASS_NEEDS[info.need],
+                    "blender": info.blender.decode(),
+                    "hint": info.hint.decode()})
+    return out
+
+
+FIELD_TYPES = ("float", "rgb", "int", "enum")  # sss_field_type's order
+
+
+def material_fields():
+    """{member: dict} of the library's material schema (sss_material_field,
+    docs/scene.md): key, type (FIELD_TYPES), profile (-1: every one),
+    transmits, default (a number, or a list of 3 for "rgb"), lo, hi,
+    lo_open, names (enum: [(name, value)]) and help."""
+    lib = library()
+    if lib.sss_struct_size(b"sss_field_info") != ctypes.sizeof(FieldInfo):
+        raise LibraryError(-1, "ABI", "sss_field_info layout differs from "
+                           "the add-on's")
+    out, info, i = {}, FieldInfo(), 0
+    while lib.sss_material_field(i, ctypes.byref(info)) == 0:
+        kind = FIELD_TYPES[info.type]
+        value = ctypes.c_int32()
+        names = []
+        while lib.sss_material_field_name(i, len(names), ctypes.byref(value)):
+            names.append((lib.sss_material_field_name(
+                i, len(names), None).decode(), value.value))
+        default = list(info.default_value)
+        out[info.member.decode()] = {
+            "key": info.key.decode(), "type": kind,
+            "profile": info.profile, "transmits": bool(info.transmits),
+            "default": default if kind == "rgb" else default[0],
+            "lo": info.lo, "hi": info.hi, "lo_open": bool(info.lo_open),
+            "names": names, "help": info.help.decode()}
+        i += 1
     return out
 
 

@@ -12,7 +12,7 @@ GROUP_NAME = "SSS Composite"       # both the group node and its node tree
 VIEWER_NAME = "SSS Viewer"
 ROLE_KEY = "sss_role"              # custom property that marks our nodes
 
-RESULT_LAYER = "SSS"
+RESULT_LAYER = "SSS"                # SSS_RESULT_LAYER in csrc/sss.h
 RESULT_PASS = "Combined"
 
 

@@ -13,8 +13,8 @@ from bpy.app.handlers import persistent
 from bpy.props import BoolProperty
 
 from . import blender_compat as compat
-from . import live, nodes, pipeline, render_flow
-from .switch_off import REQUIRED_PASSES, pass_indices
+from . import live, native, nodes, pipeline, render_flow
+from .switch_off import pass_indices, required_passes
 
 # Only one run at a time: its worker thread, alive while the library runs
 # (also after an Esc, until the library returns).
@@ -61,12 +61,9 @@ def _poll_common(cls, context):
     if _busy():
         cls.poll_message_set("An SSS run is in progress")
         return False
-    if scene.camera is None:
-        cls.poll_message_set("The scene has no camera")
-        return False
-    if scene.render.engine != 'CYCLES':
-        cls.poll_message_set("Switch the render engine to Cycles: the "
-                             "library needs its Material Index pass")
+    problem = pipeline.scene_problem(scene)
+    if problem:
+        cls.poll_message_set(problem)
         return False
     return True
 
@@ -76,8 +73,12 @@ def _missing_passes(layer):
     not render (Render with SSS turns them on for its own render)."""
     if layer is None:
         return []
+    try:
+        needed = required_passes()
+    except native.LibraryError:
+        return []  # the run itself says what is wrong with the library
     return [layer.bl_rna.properties["use_pass_" + p].name
-            for p in REQUIRED_PASSES if not getattr(layer, "use_pass_" + p)]
+            for p in needed if not getattr(layer, "use_pass_" + p)]
 
 
 # Per scene name, what its last render lacked (the Render Result keeps no
@@ -134,7 +135,7 @@ class _SSSRunBase:
 
     def _nothing_to_do(self, context):
         """A scene where nothing scatters is left alone, and we say so."""
-        if pipeline.analyse(context.scene).found:
+        if pipeline.analyse(context.scene).materials:
             return False
         self.report({'WARNING'}, "No material scatters: nothing to do; "
                     "the render is left alone")
@@ -145,14 +146,13 @@ class _SSSRunBase:
         try:
             if self._nothing_to_do(context):
                 return {'CANCELLED'}
-            nothing = False
             job = self.prepare(context)
             pipeline.scatter(job)
             image = pipeline.finish(context, job)
         except Exception as ex:
             self.report({'ERROR'}, _one_line(ex))
             return {'CANCELLED'}
-        self._report_done(job, image, nothing)
+        self.report({'INFO'}, _done_text(job, image))
         return {'FINISHED'}
 
     # -- interactive: the library runs in a worker thread
@@ -163,7 +163,6 @@ class _SSSRunBase:
         try:
             if self._nothing_to_do(context):
                 return {'CANCELLED'}
-            self._nothing = False
             job = self.prepare(context)
         except Exception as ex:
             self.report({'ERROR'}, _one_line(ex))
@@ -224,7 +223,7 @@ class _SSSRunBase:
         except Exception as ex:
             self.report({'ERROR'}, _one_line(ex))
             return {'CANCELLED'}
-        self._report_done(self._run.job, image, self._nothing)
+        self.report({'INFO'}, _done_text(self._run.job, image))
         _redraw(context)
         return {'FINISHED'}
 
@@ -243,12 +242,6 @@ class _SSSRunBase:
         workspace = getattr(context, "workspace", None)
         if workspace is not None:
             workspace.status_text_set(None)
-
-    def _report_done(self, job, image, nothing):
-        if nothing:
-            self.report({'WARNING'}, "No material scatters: the result is "
-                        "the render recombined from its passes")
-        self.report({'INFO'}, _done_text(job, image))
 
 
 class SSS_OT_render(_SSSRunBase, bpy.types.Operator):
@@ -378,7 +371,7 @@ class SSS_OT_assign_pass_indices(bpy.types.Operator):
         except Exception as ex:
             self.report({'ERROR'}, _one_line(ex))
             return {'CANCELLED'}
-        if not found.found:
+        if not found.materials:
             self.report({'WARNING'}, "No material scatters")
             return {'CANCELLED'}
         changed = []

@@ -61,13 +61,14 @@ def output_dir(scene):
     return path
 
 
-def _safe(name):
+def safe_name(name):
+    """A scene or layer name as it appears in the add-on's file names."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "scene"
 
 
 def paths_for(scene, frame):
     base = os.path.join(output_dir(scene),
-                        f"{_safe(scene.name)}_{frame:04d}")
+                        f"{safe_name(scene.name)}_{frame:04d}")
     return base + "_passes.exr", base + "_sss.exr", base + "_scene.json"
 
 
@@ -75,12 +76,22 @@ def paths_for(scene, frame):
 
 # ----------------------------------------------------------------- render
 
-def _check_scene(scene):
+def scene_problem(scene):
+    """Why the scene cannot be rendered with SSS, as one sentence, or None:
+    what the operators' poll, the sidebar and every run say."""
     if scene.camera is None:
-        raise SSSError("the scene has no camera")
+        return "The scene has no camera"
     if scene.render.engine != "CYCLES":
-        raise SSSError(f"{scene.render.engine.title()} renders have no "
-                       "Material Index pass; render with Cycles")
+        return (f"{scene.render.engine.title()} renders have no Material "
+                "Index pass: switch the render engine to Cycles")
+    return None
+
+
+def check_scene(scene):
+    """Raises SSSError with scene_problem's sentence, if any."""
+    problem = scene_problem(scene)
+    if problem:
+        raise SSSError(problem[0].lower() + problem[1:])
 
 
 def save_passes(scene, path):
@@ -101,7 +112,7 @@ def save_passes(scene, path):
                        "yet?)")
 
 
-def _check_library():
+def check_library():
     """Fails before a long render, not after it, if libsss is missing."""
     try:
         native.library()
@@ -113,24 +124,23 @@ def prepare_render(context):
     """Renders the current frame with material SSS off and restores the
     scene; returns the job for scatter()."""
     scene = context.scene
-    _check_scene(scene)
-    _check_library()
+    check_scene(scene)
+    check_library()
     found = analyse(scene)
     inp, out, desc = paths_for(scene, scene.frame_current)
     with switched_off(scene, found) as undo:
         # The compositor would only show the previous SSS result again.
         undo.set(scene.render, "use_compositing", False)
-        fail = os.environ.get("SSS_TEST_FAIL")
-        if fail == "render":
-            raise SSSError("injected failure (SSS_TEST_FAIL=render)")
-        # SSS_TEST_FAIL=cancel: as if the artist pressed Esc.
-        status = {"CANCELLED"} if fail == "cancel" else \
-            bpy.ops.render.render()
+        # SSS_TEST_FAIL=cancel: as if the artist pressed Esc (which a
+        # headless test cannot; every other failure is injected from the
+        # test side, tests/blender/faults.py).
+        status = {"CANCELLED"} if os.environ.get("SSS_TEST_FAIL") == \
+            "cancel" else bpy.ops.render.render()
         if status != {"FINISHED"}:
             raise SSSError("the render was cancelled; nothing was changed")
         save_passes(scene, inp)
         write_description(scene, found, desc)
-    summary = f"{len(found.found)} scattering material(s)"
+    summary = f"{len(found.materials)} scattering material(s)"
     if transmission.transmitting(found):
         need, why = transmission.wanted(scene, found)
         summary += f"; back-light layer {'on' if need else 'off'}, {why}"
@@ -141,8 +151,8 @@ def prepare_last_render(context):
     """Uses the existing Render Result (rendered with the passes the
     library needs) instead of rendering again."""
     scene = context.scene
-    _check_scene(scene)
-    _check_library()
+    check_scene(scene)
+    check_library()
     found = analyse(scene)
     inp, out, desc = paths_for(scene, scene.frame_current)
     # Pass indices must be those the render used: assign them the same way
@@ -151,7 +161,7 @@ def prepare_last_render(context):
         write_description(scene, found, desc)
     save_passes(scene, inp)
     return Job(inp, out, desc, context.view_layer.name,
-               summary=f"{len(found.found)} scattering material(s)")
+               summary=f"{len(found.materials)} scattering material(s)")
 
 
 def scatter(job, progress=None):
@@ -169,8 +179,6 @@ def scatter(job, progress=None):
     try:
         with native.Scene(job.scene_json) as scene:
             radius_scale = job.radius_scale
-            if os.environ.get("SSS_TEST_FAIL") == "library":
-                radius_scale = -1.0  # the library refuses it: a real error
             if progress is not None:
                 progress("read", 0.0)
             started = time.perf_counter()

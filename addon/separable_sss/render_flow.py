@@ -41,7 +41,7 @@ from bpy.app.handlers import persistent
 
 from . import blender_compat as compat
 from . import live, native, nodes, pipeline, transmission
-from .switch_off import TAG, _Undo, switched_off
+from .switch_off import TAG, Undo, switched_off
 
 # The render in progress, per scene name (handlers get nothing else).
 _flows = {}
@@ -72,7 +72,7 @@ class Flow:
         self.copy = None
         self.folder = tempfile.mkdtemp(prefix="render-",
                                        dir=pipeline.output_dir(scene))
-        self.tree_undo = _Undo()
+        self.tree_undo = Undo()
         self.layers = []     # view layer names the compositor shows
         self.images = {}     # view layer name -> its result image
         self.done = set()    # frames whose results are on disk
@@ -91,13 +91,13 @@ class Flow:
 
     def result_path(self, layer, frame):
         return os.path.join(self.folder,
-                            f"{pipeline._safe(layer)}_{frame:04d}.exr")
+                            f"{pipeline.safe_name(layer)}_{frame:04d}.exr")
 
     # -- set-up
     def open(self):
         scene = self.scene
-        pipeline._check_scene(scene)
-        pipeline._check_library()
+        pipeline.check_scene(scene)
+        pipeline.check_library()
         copy = scene.copy()
         copy.name = f"{scene.name} (SSS passes)"
         self.copy = copy
@@ -155,7 +155,7 @@ class Flow:
             n.frame_start, n.frame_offset, n.frame_duration = o[2:]
         self.tree_undo.add(restore)
         node.image = self.images[layer]
-        node.layer = "SSS"
+        node.layer = nodes.RESULT_LAYER
         self._follow_frames(node)
 
     def _result_nodes(self, node):
@@ -169,7 +169,7 @@ class Flow:
             image.source = 'SEQUENCE'
             self.images[node.layer] = image
         made = []
-        for dy, layer in ((0, "SSS"), (-260, node.layer)):
+        for dy, layer in ((0, nodes.RESULT_LAYER), (-260, node.layer)):
             im = tree.nodes.new("CompositorNodeImage")
             undo.add(lambda im=im: tree.nodes.remove(im))
             im.label = TAG
@@ -250,9 +250,6 @@ class Flow:
                  f"{'on' if need else 'off'}, {why}")
         desc = os.path.join(self.folder, f"scene_{frame:04d}.json")
         with switched_off(copy, found):
-            if os.environ.get("SSS_TEST_FAIL") == "pass":
-                for layer in copy.view_layers:  # a real missing pass
-                    layer.use_pass_diffuse_color = False
             pipeline.write_description(scene, found, desc)
             copy.render.filepath = self.passes_path(frame)
             status = bpy.ops.render.render(write_still=True,
@@ -303,17 +300,18 @@ class Flow:
             # A view layer already named SSS-NAME would be replaced by
             # NAME's result: refused, as the library refuses one named SSS.
             taken = {layer for layer, *_ in out.passes()}
+            result = nodes.RESULT_LAYER
             for layer in self.layers[1:]:
-                if "SSS-" + layer in taken:
+                if f"{result}-{layer}" in taken:
                     raise pipeline.SSSError(
-                        f"frame {frame}: view layer 'SSS-{layer}' has the "
-                        f"name of view layer '{layer}''s SSS result, which "
-                        "would replace it; rename it")
+                        f"frame {frame}: view layer '{result}-{layer}' has "
+                        f"the name of view layer '{layer}''s SSS result, "
+                        "which would replace it; rename it")
             out.copy_layer(written, "Composite")
             for layer in self.layers[1:]:
                 with native.Exr(self.result_path(layer, frame)) as other:
                     out.copy_layer(other, layer)
-                    out.copy_layer(other, "SSS", "SSS-" + layer)
+                    out.copy_layer(other, result, f"{result}-{layer}")
             out.write(path)
 
     def blank(self):
@@ -415,7 +413,7 @@ def _unhook_old_setup(scene):
     if found is None:
         return None
     tree, composite, layers = found
-    undo = _Undo()
+    undo = Undo()
     source = composite.links[0].from_socket
     tree.links.remove(composite.links[0])
     undo.add(lambda: tree.links.new(source, composite))
@@ -449,7 +447,7 @@ def on_init(scene, *_):
              "the add-on's key binding, Render with SSS or blender -b")
         return
     last_error = None
-    if not pipeline.analyse(scene).found:
+    if not pipeline.analyse(scene).materials:
         _say(scene, "no material scatters; the render is left alone")
         return
     try:

@@ -16,15 +16,21 @@ from contextlib import contextmanager
 import bpy
 
 from . import blender_compat as compat
-from . import transmission
+from . import native, transmission
 from .blender_compat import principled_input
 
-# What the library cannot do without (Apply SSS to Last Render checks that
-# a render had them), then what every render with SSS also asks for.
-REQUIRED_PASSES = ("diffuse_direct", "diffuse_indirect", "diffuse_color",
-                   "z", "material_index")
-PASSES = REQUIRED_PASSES + ("glossy_direct", "glossy_indirect",
-                            "glossy_color")
+
+def required_passes():
+    """Blender's names (use_pass_<name>) of the passes the library needs
+    of a Cycles render, from its own table (sss_render_pass): Apply SSS to
+    Last Render checks that a render had them."""
+    return tuple(p["blender"] for p in native.render_passes()
+                 if p["need"] != "optional")
+
+
+# What every render with SSS also asks for: with the required ones,
+# whatever the scene holds; then the optional ones, as the scene needs.
+GLOSSY_PASSES = ("glossy_direct", "glossy_indirect", "glossy_color")
 OPTIONAL_PASSES = {"emit": "emits", "environment": None,
                    "transmission_direct": "transmits",
                    "transmission_indirect": "transmits",
@@ -33,7 +39,7 @@ OPTIONAL_PASSES = {"emit": "emits", "environment": None,
 TAG = "SSS switch-off"  # label of every node we add
 
 
-class _Undo:
+class Undo:
     """A list of closures that put things back, run in reverse order."""
 
     def __init__(self):
@@ -143,12 +149,12 @@ def pass_indices(analysis):
     Pass Indices operator. Another material's index is off limits, a
     non-scattering one's too: its pixels would scatter with this
     profile."""
-    scattering = {f.material for f in analysis.found}
+    scattering = {f.material for f in analysis.materials}
     taken = {m.pass_index for m in bpy.data.materials
              if m not in scattering and m.pass_index}
     next_index = max(taken | {m.pass_index for m in scattering} | {0}) + 1
     used, out = set(), {}
-    for found in analysis.found:
+    for found in analysis.materials:
         mat = found.material
         if mat in out:
             continue
@@ -165,7 +171,7 @@ def assign_pass_indices(analysis):
     """Sets every found material's pass index in the analysis (not on the
     material) by pass_indices(); returns the mapping."""
     indices = pass_indices(analysis)
-    for found in analysis.found:
+    for found in analysis.materials:
         found.pass_index = indices[found.material]
     return indices
 
@@ -178,7 +184,7 @@ def _free_pass_indices(scene, analysis, undo):
 
 def _enable_passes(scene, analysis, undo):
     for layer in scene.view_layers:
-        for name in PASSES:
+        for name in required_passes() + GLOSSY_PASSES:
             undo.set(layer, "use_pass_" + name, True)
         for name, needs in OPTIONAL_PASSES.items():
             if hasattr(layer, "use_pass_" + name) and (
@@ -193,13 +199,13 @@ def switched_off(scene, analysis, backlight=True):
     when a transmitting material is lit from behind: transmission.py); on
     leaving (normally or by an exception) every changed value, link, node,
     layer and material is restored or removed."""
-    undo = _Undo()
+    undo = Undo()
     try:
         _free_pass_indices(scene, analysis, undo)
         _enable_passes(scene, analysis, undo)
         if backlight:
             transmission.add_layer(scene, analysis, undo)
-        for found in analysis.found:
+        for found in analysis.materials:
             tree = found.material.node_tree
             if found.node.type == "BSDF_PRINCIPLED":
                 _switch_principled(tree, found.node, undo)

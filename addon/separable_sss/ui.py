@@ -222,15 +222,6 @@ class _SidebarPanel:
     bl_category = "SSS"
 
 
-def _scene_problem(scene):
-    """Why Render with SSS is disabled, as one line, or None."""
-    if scene.camera is None:
-        return "The scene has no camera"
-    if scene.render.engine != 'CYCLES':
-        return "Needs Cycles (its Material Index pass)"
-    return None
-
-
 def _draw_live(layout, context, scene):
     """Live Re-tune: whether the render's passes are kept, and the last
     re-tune's time or error."""
@@ -276,7 +267,7 @@ class SSS_PT_node_main(_SidebarPanel, bpy.types.Panel):
                 getattr(context.space_data, "edit_tree", None) and
                 context.space_data.edit_tree.nodes.active):
             col.operator("sss.scatter_image", icon='NODE_COMPOSITING')
-        problem = _scene_problem(scene)
+        problem = pipeline.scene_problem(scene)
         if problem:
             _wrapped(layout, context, problem, 'ERROR')
         _draw_live(layout, context, scene)
@@ -308,10 +299,10 @@ class SSS_PT_node_found(_SidebarPanel, bpy.types.Panel):
             _wrapped(layout, context, "Could not analyse the scene: %s"
                      % ex, 'ERROR')
             return
-        if not analysis.found:
+        if not analysis.materials:
             layout.label(text="No material scatters", icon='INFO')
         col = layout.column(align=True)
-        for found in analysis.found:
+        for found in analysis.materials:
             self._draw_found(col.box(), scene, found)
         for message in analysis.messages:
             _wrapped(layout, context, message, 'INFO')
@@ -425,7 +416,7 @@ class SSS_PT_node_advanced(_SidebarPanel, bpy.types.Panel):
         if s.last_result:
             col.label(text="Last result:")
             col.prop(s, "last_result", text="")
-        if pipeline.analyse(scene).found:
+        if pipeline.analyse(scene).materials:
             col.operator("sss.assign_pass_indices", icon='LINENUMBERS_ON')
         if nodes.find_result(scene) is not None:
             col.operator("sss.remove_setup", icon='X')

@@ -56,7 +56,7 @@ def test_every_method_choice_reaches_the_library(scene, tmp_path):
 
 def test_description_is_read_without_warnings(scene, tmp_path):
     found = analysis.analyse(scene)
-    assert len(found.found) == 2
+    assert len(found.materials) == 2
     scene.sss.radius_scale = 1.5
     path = str(tmp_path / "scene.json")
     write(scene, found, path)
@@ -68,7 +68,7 @@ def test_description_is_read_without_warnings(scene, tmp_path):
 
 
 def test_sizes_come_from_the_library(scene):
-    found = analysis.analyse(scene).found[0]
+    found = analysis.analyse(scene).materials[0]
     entry = description.library_material(scene, found)
     scene.sss.radius_scale = 2.0
     assert pipeline.support_metres(scene, found) == pytest.approx(
@@ -83,3 +83,48 @@ def test_sizes_come_from_the_library(scene):
     assert max(native.transmittance(entry, reach)) <= 0.0101
     assert transmission._len_metres(found, scene) == pytest.approx(reach)
     found.material.sss.transmission = "AUTO"
+
+
+def test_material_properties_follow_the_librarys_schema():
+    """Every material setting that is a field of the library's schema
+    (sss_material_field) has the library's default and stays within its
+    range (1e30: no upper bound), so what an artist can set is what the
+    library accepts."""
+    import numpy as np
+    fields = native.material_fields()
+    rna = properties.SSSMaterialSettings.bl_rna.properties
+    shared = [m for m in fields if m in rna.keys()]
+    assert len(shared) >= 15, shared
+    for member in shared:
+        f, prop = fields[member], rna[member]
+        if f["type"] == "rgb":
+            assert list(prop.default_array) == list(
+                np.float32(f["default"])), member
+        elif f["type"] == "float":
+            assert prop.default == np.float32(f["default"]), member
+        elif f["type"] == "int":
+            assert prop.default == int(f["default"]), member
+        else:
+            continue
+        assert prop.hard_min > f["lo"] if f["lo_open"] else \
+            prop.hard_min >= f["lo"], member
+        assert f["hi"] >= 1e30 or prop.hard_max <= f["hi"], member
+
+
+def test_required_passes_are_the_librarys(scene):
+    """The passes the add-on turns on and checks for are the library's
+    table (sss_render_pass), named as Blender's view layer names them."""
+    from separable_sss import switch_off
+    table = native.render_passes()
+    assert [p["name"] for p in table][:3] == ["DiffDir", "DiffInd",
+                                              "DiffCol"]
+    layer = scene.view_layers[0]
+    for p in table:
+        if p["blender"] != "combined":   # always rendered, no switch
+            assert hasattr(layer, "use_pass_" + p["blender"]), p
+    required = switch_off.required_passes()
+    assert set(required) == {"diffuse_direct", "diffuse_indirect",
+                             "diffuse_color", "z", "material_index"}
+    with pipeline.switched_off(scene, analysis.analyse(scene),
+                               backlight=False):
+        assert all(getattr(layer, "use_pass_" + p) for p in required)

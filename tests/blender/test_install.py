@@ -8,6 +8,7 @@ import bpy
 import numpy as np
 import pytest
 
+import faults
 from helpers import BLENDER, build_blend, compat, diff, snapshot
 from exr import pass_rgb, read_channels
 
@@ -97,7 +98,8 @@ def test_library_error_is_one_line_and_restores(blends, tmp_path,
     scene = bpy.context.scene
     scene.sss.output_dir = str(tmp_path)
     before = snapshot(scene)
-    monkeypatch.setenv("SSS_TEST_FAIL", "library")
+    import separable_sss.pipeline  # the installed add-on's
+    faults.library_refuses(monkeypatch, separable_sss.pipeline)
     # Called from Python, an operator's ERROR report becomes a RuntimeError
     # carrying the report's text: one line, the library's own message.
     with pytest.raises(RuntimeError) as err:

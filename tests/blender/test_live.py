@@ -38,7 +38,7 @@ def open_rendered(blend, out_dir):
 
 def principled(scene):
     """The first scattering material's Principled BSDF."""
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     assert found, "the test scene has no scattering material"
     return found[0].node
 

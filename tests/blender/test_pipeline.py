@@ -13,6 +13,8 @@ from helpers import (BLENDER, BUILD, ROOT, build_blend, compat, diff,
 separable_sss = load_addon()
 from separable_sss import pipeline  # noqa: E402
 
+import faults  # noqa: E402
+
 from exr import pass_rgb, read_channels  # noqa: E402
 
 
@@ -43,6 +45,17 @@ def render(scene):
     return job
 
 
+def inject(where, monkeypatch):
+    """A failure after the render, a cancelled render, or the library's
+    refusal (tests/blender/faults.py)."""
+    if where == "cancel":
+        monkeypatch.setenv("SSS_TEST_FAIL", "cancel")
+    elif where == "render":
+        faults.fail_after_render(monkeypatch, pipeline)
+    else:
+        faults.library_refuses(monkeypatch, pipeline)
+
+
 def test_scene_restored_exactly_after_render(blends, tmp_path):
     scene = open_scene(blends["two"], tmp_path)
     before = snapshot(scene)
@@ -58,7 +71,7 @@ def test_scene_restored_after_failure(blends, tmp_path, monkeypatch, where,
                                       needle):
     scene = open_scene(blends["two"], tmp_path)
     before = snapshot(scene)
-    monkeypatch.setenv("SSS_TEST_FAIL", where)
+    inject(where, monkeypatch)
     with pytest.raises(pipeline.SSSError) as err:
         render(scene)
     assert needle in str(err.value)
@@ -249,7 +262,7 @@ def test_description_follows_the_method(blends, tmp_path, method):
 
 def test_no_scattering_material(blends, tmp_path):
     scene = open_scene(blends["none"], tmp_path)
-    assert pipeline.analyse(scene).found == []
+    assert pipeline.analyse(scene).materials == []
 
 
 def test_render_sss_script(blends, tmp_path):
@@ -278,7 +291,7 @@ def test_non_scattering_material_index_is_off_limits(blends, tmp_path):
     scatter with this profile), as Assign Pass Indices does; the material
     keeps its own index after the render."""
     scene = open_scene(blends["two"], tmp_path)
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     mat = found[0].material
     mat.pass_index = 7
     plain = bpy.data.materials.new("Plain")

@@ -18,6 +18,8 @@ from helpers import BLENDER, BUILD, ROOT, build_blend, compat, diff, \
 separable_sss = load_addon()
 from separable_sss import pipeline, render_flow  # noqa: E402
 
+import faults  # noqa: E402
+
 from exr import read_channels  # noqa: E402
 
 
@@ -280,7 +282,7 @@ def test_failed_frame_restores_and_reports(blend, tmp_path, monkeypatch):
     scene = open_scene(blend, tmp_path)
     before = snapshot(scene)
     scene.sss.enabled = True
-    monkeypatch.setenv("SSS_TEST_FAIL", "pass")
+    faults.drop_a_pass(monkeypatch, render_flow)
     with pytest.raises(RuntimeError) as err:  # the operator's ERROR report
         bpy.ops.sss.render_frame()
     message = str(err.value).strip()
@@ -341,7 +343,10 @@ def test_failed_frame_fails_blender_b(blend, tmp_path):
     scene.render.filepath = str(tmp_path / "frame_####")
     path = str(tmp_path / "fail.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
-    proc = run_blender(path, "-f", "1", env={"SSS_TEST_FAIL": "pass"})
+    drop = ("import sys; sys.path.insert(0, %r); import faults; "
+            "from separable_sss import render_flow; "
+            "faults.patch(render_flow)" % os.path.dirname(__file__))
+    proc = run_blender(path, "--python-expr", drop, "-f", "1")
     assert proc.returncode != 0
     assert "DiffCol" in proc.stdout and "frame 1" in proc.stdout, \
         proc.stdout[-2000:]

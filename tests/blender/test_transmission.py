@@ -14,6 +14,8 @@ separable_sss = load_addon()
 from separable_sss import blender_compat as compat  # noqa: E402
 from separable_sss import pipeline, transmission  # noqa: E402
 
+import faults  # noqa: E402
+
 from exr import read_channels  # noqa: E402
 
 
@@ -108,7 +110,10 @@ def test_restored_after_success(slab, tmp_path):
 def test_restored_after_error(slab, tmp_path, monkeypatch, where):
     scene = open_scene(slab, tmp_path)
     before = state(scene)
-    monkeypatch.setenv("SSS_TEST_FAIL", where)
+    if where == "cancel":
+        monkeypatch.setenv("SSS_TEST_FAIL", "cancel")
+    else:
+        faults.fail_after_render(monkeypatch, pipeline)
     with pytest.raises(pipeline.SSSError):
         pipeline.prepare_render(bpy.context)
     after = state(scene)
@@ -192,12 +197,12 @@ def test_auto_is_profile_for_random_walk(slab, tmp_path):
     scene = open_scene(slab, tmp_path)
     mat = bpy.data.materials["Skin"]
     mat.sss.transmission = "AUTO"
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     assert [transmission.model(f) for f in found] == ["BURLEY"]
     assert transmission.wanted(scene, pipeline.analyse(scene))[0]
     node = mat.node_tree.nodes["Principled BSDF"]
     node.subsurface_method = "BURLEY"
-    found = pipeline.analyse(scene).found
+    found = pipeline.analyse(scene).materials
     assert [transmission.model(f) for f in found] == ["OFF"]
     assert not transmission.wanted(scene, pipeline.analyse(scene))[0]
 
