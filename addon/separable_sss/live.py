@@ -8,12 +8,15 @@ Color; our own profile fields) scatters them again with the new scene
 description, in memory, and pushes the pixels into an image that the
 compositor's SSS Result node shows: no render, no file read or written.
 
-Changes are gathered by a depsgraph handler and run once they settle (a
-slider being dragged scatters when it pauses); undo and redo scatter again
-for the restored settings. The passes are freed when the scene, the file
+Changes are gathered by a depsgraph handler (and our own settings' update
+callbacks) and run once they settle (a slider being dragged scatters when
+it pauses), in a worker thread so that the window stays responsive, the
+result shown when it is done; undo and redo scatter again for the restored
+settings. The passes are freed when the scene, the file
 or the render goes away (another render of the scene, loading a file)."""
 import json
 import os
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -46,6 +49,8 @@ class Kept:
     fixed: dict = None
     # Per material, the scene radius scale its back light was rendered at.
     baked: dict = None
+    # The live loop's scatter running in the background, if any.
+    job: object = None              # _Job
 
 
 _kept = {}        # scene name -> Kept
@@ -68,6 +73,7 @@ def drop(scene_name):
     _pending.pop(scene_name, None)
     last_error.pop(scene_name, None)
     if entry is not None:
+        _discard(entry)     # its scatter reads the frame: not freed under it
         entry.frame.close()
 
 
@@ -218,6 +224,7 @@ def retune(scene, force=False):
     entry = kept(scene)
     if entry is None:
         return None
+    _discard(entry)         # this scatter supersedes a background one
     started = time.perf_counter()
     text = _entry_text(scene, entry)
     if text == entry.description and not force:
@@ -235,6 +242,75 @@ def retune(scene, force=False):
     return timings
 
 
+class _Job:
+    """The live loop's scatter in a worker thread: the library releases
+    the interpreter while it works, so Blender's window stays responsive
+    (a large frame can take seconds). It writes its own buffer; the main
+    thread shows it once done (_finish)."""
+
+    def __init__(self, entry, text):
+        self.text = text
+        self.started = time.perf_counter()
+        self.combined = np.empty_like(entry.combined)
+        self.timings = self.error = None
+        self.desc = native.Scene(text=text)   # parsed here: errors now
+        self.thread = threading.Thread(target=self._run, args=(entry.frame,),
+                                       name="sss-live", daemon=True)
+        self.thread.start()
+
+    def _run(self, frame):
+        try:
+            self.timings = frame.scatter(self.desc, self.combined)
+        except Exception as ex:  # reported on the main thread
+            self.error = ex
+
+
+def _discard(entry):
+    """Waits for the entry's background scatter and drops its result."""
+    if entry.job is not None:
+        entry.job.thread.join()
+        entry.job.desc.close()
+        entry.job = None
+
+
+def _start(scene, entry):
+    """Starts a background re-tune when the settings changed since the
+    last one; returns whether one runs. Raises SSSError (a description
+    the library refuses)."""
+    text = _entry_text(scene, entry)
+    if text == entry.description:
+        return False
+    try:
+        entry.job = _Job(entry, text)
+    except native.LibraryError as e:
+        entry.description = text       # not tried again until it changes
+        raise SSSError(str(e)) from None
+    return True
+
+
+def _finish(scene, entry):
+    """Shows a finished background re-tune (main thread); False while it
+    runs."""
+    job = entry.job
+    if job is None:
+        return True
+    if job.thread.is_alive():
+        return False
+    entry.job = None
+    job.desc.close()
+    entry.description = job.text
+    if job.error is not None:
+        error = job.error
+        raise SSSError(str(error)) if isinstance(
+            error, native.LibraryError) else error
+    entry.combined = job.combined
+    show(scene, entry)
+    job.timings["total"] = time.perf_counter() - job.started
+    entry.timings = job.timings
+    last_error.pop(scene.name, None)
+    return True
+
+
 # ------------------------------------------------------------- handlers
 
 # What a depsgraph update must touch to change the description: the scene
@@ -244,30 +320,59 @@ _WATCHED = (bpy.types.Scene, bpy.types.Material, bpy.types.ShaderNodeTree,
             bpy.types.Camera)
 
 
+def _report(name, ex):
+    last_error[name] = str(ex).strip().splitlines()[0] if str(ex) \
+        else type(ex).__name__
+    print(f"SSS: {name}: live re-tune failed: {last_error[name]}",
+          flush=True)
+
+
+POLL_SECONDS = 0.03   # how often a running background re-tune is looked at
+
+
 def _settled():
-    """Timer: re-tunes every scene whose changes have settled; runs
-    again while some have not."""
+    """Timer: shows the background re-tunes that finished and starts one
+    for every scene whose changes have settled (a scene whose re-tune
+    still runs starts its next one after it); runs again while any waits
+    or runs."""
     now = time.monotonic()
     wait = None
-    for name, changed in list(_pending.items()):
-        left = SETTLE_SECONDS - (now - changed)
-        if left > 0.0:
-            wait = left if wait is None else min(wait, left)
-            continue
-        _pending.pop(name, None)
+
+    def again(seconds):
+        nonlocal wait
+        wait = seconds if wait is None else min(wait, seconds)
+
+    for name, entry in list(_kept.items()):
         scene = bpy.data.scenes.get(name)
-        if scene is None or name not in _kept:
+        if entry.job is None or scene is None:
+            continue
+        try:
+            if not _finish(scene, entry):
+                again(POLL_SECONDS)
+        except Exception as ex:  # shown in the panel; the loop goes on
+            _report(name, ex)
+    for name, changed_at in list(_pending.items()):
+        left = SETTLE_SECONDS - (now - changed_at)
+        if left > 0.0:
+            again(left)
+            continue
+        scene = bpy.data.scenes.get(name)
+        entry = _kept.get(name)
+        if scene is None or entry is None:
+            _pending.pop(name, None)
             drop(name)
             continue
+        if entry.job is not None:
+            again(POLL_SECONDS)   # after the running one
+            continue
+        _pending.pop(name, None)
         if not scene.sss.live:
             continue
         try:
-            retune(scene)
-        except Exception as ex:  # shown in the panel; the loop goes on
-            last_error[name] = str(ex).strip().splitlines()[0] if str(ex) \
-                else type(ex).__name__
-            print(f"SSS: {name}: live re-tune failed: {last_error[name]}",
-                  flush=True)
+            if _start(scene, entry):
+                again(POLL_SECONDS)
+        except Exception as ex:
+            _report(name, ex)
     return wait
 
 

@@ -57,6 +57,17 @@ def shown_pixels(scene):
     return image, px.reshape(h, w, 4)[::-1]
 
 
+def settle():
+    """Runs the live loop's timer until it has nothing left to do, as
+    Blender's event loop would (headless Blender runs no timers)."""
+    for _ in range(2000):
+        wait = live._settled()
+        if wait is None:
+            return
+        time.sleep(wait)
+    raise AssertionError("the live loop never settled")
+
+
 def files(folder):
     return {name: os.stat(os.path.join(folder, name)).st_mtime_ns
             for name in os.listdir(folder)}
@@ -111,8 +122,9 @@ def test_depsgraph_change_retunes_once_settled(blend, tmp_path):
     scale_radius(scene, 3.0)
     bpy.context.view_layer.update()
     assert scene.name in live._pending
-    time.sleep(live.SETTLE_SECONDS * 1.5)
-    assert live._settled() is None
+    first = live._settled()       # not settled yet: it waits
+    assert first is not None and first > 0.0
+    settle()
     assert live.kept(scene).timings.get("scatter", -1.0) >= 0.0
     assert live.retune(scene) == {}   # already done
 
@@ -249,9 +261,8 @@ def test_own_settings_schedule_a_retune(blend, tmp_path):
     live._pending.clear()
     scene.sss.output_dir = str(tmp_path / "elsewhere")
     assert scene.name not in live._pending
-    time.sleep(live.SETTLE_SECONDS * 1.5)
     live._pending[scene.name] = 0.0
-    live._settled()
+    settle()
     assert live.kept(scene).timings["scatter"] >= 0.0
 
 
@@ -268,8 +279,38 @@ def test_back_light_keeps_the_rendered_radius(blend, tmp_path):
     with pytest.raises(pipeline.SSSError, match="render it again"):
         live.retune(scene)
     live._pending[scene.name] = 0.0
-    live._settled()
+    settle()
     assert "render it again" in live.last_error[scene.name]
     scene.sss.radius_scale = 0.0
     assert live.retune(scene)["scatter"] >= 0.0
     assert scene.name not in live.last_error
+
+
+def test_background_retune_shows_when_done(blend, tmp_path):
+    """The live loop scatters in a worker thread and shows the result on
+    the main thread once done: the same pixels as Apply's scatter, and a
+    change made meanwhile is scattered after it; freeing the passes waits
+    for a running scatter."""
+    scene = open_rendered(blend, tmp_path)
+    live._pending.clear()
+    scale_radius(scene, 3.0)
+    live._pending[scene.name] = 0.0
+    assert live._settled() == live.POLL_SECONDS     # started, running
+    entry = live.kept(scene)
+    assert entry.job is not None
+    scale_radius(scene, 1.5)                        # changed meanwhile
+    live._pending[scene.name] = 0.0
+    settle()
+    assert entry.job is None and scene.name not in live._pending
+    _, shown = shown_pixels(scene)
+    background = shown.copy()
+    assert bpy.ops.sss.apply() == {'FINISHED'}      # the same, in front
+    _, again = shown_pixels(scene)
+    assert np.array_equal(background, again)
+    # Freeing the passes while a scatter runs waits for it.
+    scale_radius(scene, 2.0)
+    live._pending[scene.name] = 0.0
+    live._settled()
+    frame = entry.frame
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    assert not frame._ptr and live.kept(bpy.context.scene) is None
