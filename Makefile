@@ -4,7 +4,8 @@
 #   make test     everything CI runs: installs missing packages (as root) and
 #                 Blender 4.5/5.0 (bpy, in build/), builds, then the C tests,
 #                 the sss command on real Blender renders (pytest), the
-#                 add-on's tests inside every supported Blender, the C tests
+#                 add-on's tests inside every supported Blender on the
+#                 self-contained library (make portable), the C tests
 #                 under valgrind, and make check
 #   make check    the C tests and the command's tests again under ASan +
 #                 UBSan, warnings as errors
@@ -124,7 +125,11 @@ test: deps all $(TESTS) addon $(BUILD)/sss-bench $(BUILD)/sss-retune
 	@sh tests/run_c_tests.sh $(BUILD) $(TESTS)
 	@SSS_BUILD=$(abspath $(BUILD)) $(PYTHON) -m pytest -q -p no:cacheprovider \
 		--ignore=tests/python/test_portable.py tests/python
-	@$(MAKE) --no-print-directory blender-test
+	@$(MAKE) --no-print-directory portable
+	@lib=$(abspath $(BUILD))/portable/$(ADDON_PLATFORM)/libsss.so; \
+	[ -f "$$lib" ] || lib=$(abspath $(BUILD))/libsss.so; \
+	echo "blender-test: the add-on on $$lib"; \
+	SSS_LIB=$$lib $(MAKE) --no-print-directory blender-test
 	@$(MAKE) --no-print-directory farm-test
 	@$(MAKE) --no-print-directory portable-test
 	@if command -v valgrind >/dev/null; then \
