@@ -194,6 +194,15 @@ typedef struct sss_camera {
 } sss_camera;
 
 SSS_API void sss_camera_default(sss_camera *cam);
+/* Horizontal pixels per metre on a plane facing the camera at planar depth
+ * `depth` (scene units; any for an orthographic camera) in a width x height
+ * image: how wide a length looks, for UIs (the add-on's kernel widths). */
+SSS_API sss_result sss_camera_pixels_per_metre(const sss_camera *cam,
+                                               int32_t width, int32_t height,
+                                               double depth,
+                                               double *pixels_per_metre,
+                                               char *errbuf,
+                                               size_t errbuf_len);
 
 /* ------------------------------------------------------------- profiles */
 

@@ -65,6 +65,33 @@ sss_result sss__projection_make(const sss_camera *cam, int32_t width,
 	return SSS_OK;
 }
 
+sss_result sss_camera_pixels_per_metre(const sss_camera *cam, int32_t width,
+                                       int32_t height, double depth,
+                                       double *pixels_per_metre, char *errbuf,
+                                       size_t errbuf_len)
+{
+	if (errbuf && errbuf_len)
+		errbuf[0] = '\0';
+	if (!cam || !pixels_per_metre)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
+		                 "camera and pixels_per_metre are required");
+	*pixels_per_metre = 0.0;
+	if (width < 1 || height < 1)
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
+		                 "image size %dx%d must be at least 1x1", width,
+		                 height);
+	sss__projection p;
+	sss_result r = sss__projection_make(cam, width, height, &p, errbuf,
+	                                    errbuf_len);
+	if (r)
+		return r;
+	if (!p.ortho && !(isfinite(depth) && depth > 0.0))
+		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
+		                 "depth %g must be finite and > 0", depth);
+	*pixels_per_metre = sss__pixels_per_unit_x(&p, depth) / cam->unit_scale;
+	return SSS_OK;
+}
+
 double sss__pixels_per_unit_x(const sss__projection *p, double z)
 {
 	return p->ortho ? p->fx : p->fx / z;

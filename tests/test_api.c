@@ -322,8 +322,53 @@ static void test_render_passes(void)
 	      "size");
 }
 
+/* sss_camera_pixels_per_metre: Blender's projection as the blur uses it,
+ * for UIs. */
+static void test_camera_pixels_per_metre(void)
+{
+	char err[256];
+	sss_camera cam;
+	sss_camera_default(&cam);
+	cam.lens_mm = 50.0;
+	cam.sensor_width_mm = 36.0;
+	double ppm = 0.0;
+	CHECK_STATUS("ppm-persp", SSS_OK,
+	             sss_camera_pixels_per_metre(&cam, 1920, 1080, 2.0, &ppm, err,
+	                                         sizeof err));
+	CHECK("ppm-persp-value", fabs(ppm - 1920.0 * 50.0 / (36.0 * 2.0)) < 1e-9,
+	      "%g", ppm);
+	cam.unit_scale = 0.01; /* centimetres: 2 units are 2 cm */
+	sss_camera_pixels_per_metre(&cam, 1920, 1080, 2.0, &ppm, err, sizeof err);
+	CHECK("ppm-units", fabs(ppm - 100.0 * 1920.0 * 50.0 / 72.0) < 1e-6,
+	      "%g", ppm);
+	cam.unit_scale = 1.0;
+	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam.ortho_scale = 4.0;
+	CHECK_STATUS("ppm-ortho", SSS_OK,
+	             sss_camera_pixels_per_metre(&cam, 1000, 2000, 0.0, &ppm, err,
+	                                         sizeof err));
+	CHECK("ppm-ortho-value", fabs(ppm - 2000.0 / 4.0) < 1e-9,
+	      "vertical fit (taller than wide): %g", ppm);
+	cam.type = SSS_CAMERA_PERSPECTIVE;
+	CHECK_STATUS("ppm-depth", SSS_ERR_INVALID_ARGUMENT,
+	             sss_camera_pixels_per_metre(&cam, 64, 64, -1.0, &ppm, err,
+	                                         sizeof err));
+	CHECK("ppm-depth-says", strstr(err, "depth") != NULL, "%s", err);
+	CHECK_STATUS("ppm-size", SSS_ERR_INVALID_ARGUMENT,
+	             sss_camera_pixels_per_metre(&cam, 0, 64, 1.0, &ppm, err,
+	                                         sizeof err));
+	CHECK_STATUS("ppm-null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_camera_pixels_per_metre(&cam, 64, 64, 1.0, NULL, err,
+	                                         sizeof err));
+	cam.lens_mm = 0.0;
+	CHECK_STATUS("ppm-camera", SSS_ERR_INVALID_ARGUMENT,
+	             sss_camera_pixels_per_metre(&cam, 64, 64, 1.0, &ppm, err,
+	                                         sizeof err));
+}
+
 int main(void)
 {
+	test_camera_pixels_per_metre();
 	test_render_passes();
 	test_status_tables();
 	test_method_names();

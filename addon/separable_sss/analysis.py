@@ -124,27 +124,6 @@ def analyse(scene):
     return result
 
 
-def camera_pixels_per_metre(scene, distance):
-    """Horizontal pixels per metre at a view distance (Blender's sensor
-    fit rules, as in csrc/sss_camera.c)."""
-    cam = scene.camera.data
-    render = scene.render
-    scale = render.resolution_percentage / 100.0
-    w = render.resolution_x * scale
-    h = render.resolution_y * scale
-    ax, ay = render.pixel_aspect_x, render.pixel_aspect_y
-    fit = cam.sensor_fit
-    if fit == "AUTO":
-        fit = "HORIZONTAL" if ax * w >= ay * h else "VERTICAL"
-    viewfac = w if fit == "HORIZONTAL" else (ay / ax) * h
-    unit = scene.unit_settings.scale_length or 1.0
-    if cam.type == "ORTHO":
-        return viewfac / (cam.ortho_scale * unit)
-    sensor = cam.sensor_height if cam.sensor_fit == "VERTICAL" else \
-        cam.sensor_width
-    return viewfac * cam.lens / (sensor * distance * unit)
-
-
 def nearest_distance(scene, material):
     """Distance from the camera to the nearest object using material."""
     if scene.camera is None:

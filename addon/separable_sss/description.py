@@ -101,23 +101,43 @@ def material_entry(found):
     return entry
 
 
-def scene_description(scene, found):
-    """The JSON the library reads (docs/scene.md)."""
+def camera_entry(scene):
+    """The description's camera (docs/scene.md)."""
     cam = scene.camera.data
     return {
+        "type": "ORTHO" if cam.type == "ORTHO" else "PERSP",
+        "lens": cam.lens, "sensor_width": cam.sensor_width,
+        "sensor_height": cam.sensor_height,
+        "sensor_fit": cam.sensor_fit,
+        "shift_x": cam.shift_x, "shift_y": cam.shift_y,
+        "ortho_scale": cam.ortho_scale,
+        "clip_start": cam.clip_start, "clip_end": cam.clip_end,
+        "pixel_aspect_x": scene.render.pixel_aspect_x,
+        "pixel_aspect_y": scene.render.pixel_aspect_y,
+    }
+
+
+def unit_scale(scene):
+    return scene.unit_settings.scale_length or 1.0
+
+
+def camera_pixels_per_metre(scene, distance):
+    """Horizontal pixels per metre at a view distance (scene units) at the
+    scene's render size, as the library projects it (csrc/sss_camera.c)."""
+    render = scene.render
+    scale = render.resolution_percentage / 100.0
+    return native.camera_pixels_per_metre(
+        camera_entry(scene), unit_scale(scene),
+        max(1, int(render.resolution_x * scale)),
+        max(1, int(render.resolution_y * scale)), distance)
+
+
+def scene_description(scene, found):
+    """The JSON the library reads (docs/scene.md)."""
+    return {
         "version": 1,
-        "camera": {
-            "type": "ORTHO" if cam.type == "ORTHO" else "PERSP",
-            "lens": cam.lens, "sensor_width": cam.sensor_width,
-            "sensor_height": cam.sensor_height,
-            "sensor_fit": cam.sensor_fit,
-            "shift_x": cam.shift_x, "shift_y": cam.shift_y,
-            "ortho_scale": cam.ortho_scale,
-            "clip_start": cam.clip_start, "clip_end": cam.clip_end,
-            "pixel_aspect_x": scene.render.pixel_aspect_x,
-            "pixel_aspect_y": scene.render.pixel_aspect_y,
-        },
-        "unit_scale": scene.unit_settings.scale_length or 1.0,
+        "camera": camera_entry(scene),
+        "unit_scale": unit_scale(scene),
         # In the description, not beside it: `sss` on this file gives
         # the add-on's result.
         "radius_scale": scene.sss.radius_scale,

@@ -162,6 +162,11 @@ def _declare(lib):
                                         c.POINTER(c.c_void_p), c.c_char_p,
                                         c.c_size_t, c.c_char_p, c.c_size_t]),
         "sss_scene_free": (None, [c.c_void_p]),
+        "sss_scene_camera": (c.c_void_p, [c.c_void_p]),
+        "sss_camera_pixels_per_metre": (c.c_int32, [c.c_void_p, c.c_int32,
+                                                    c.c_int32, c.c_double,
+                                                    c.POINTER(c.c_double),
+                                                    c.c_char_p, c.c_size_t]),
         "sss_scene_materials": (c.c_void_p, [c.c_void_p,
                                              c.POINTER(c.c_int32)]),
         "sss_scene_material_name": (c.c_char_p, [c.c_void_p, c.c_int32]),
@@ -356,6 +361,27 @@ def _material(material):
                                len(warn), err, len(err)), err)
     try:
         yield lib.sss_scene_materials(ptr, None)
+    finally:
+        lib.sss_scene_free(ptr)
+
+
+def camera_pixels_per_metre(camera, unit_scale, width, height, depth):
+    """Horizontal pixels per metre at planar depth `depth` (scene units) of
+    a scene description's camera (a dict, docs/scene.md) in a width x
+    height image, as the library projects it."""
+    lib = library()
+    text = json.dumps({"version": 1, "camera": camera,
+                       "unit_scale": unit_scale, "materials": []}).encode()
+    ptr = ctypes.c_void_p()
+    err = ctypes.create_string_buffer(4096)
+    _check(lib.sss_scene_parse(text, len(text), ctypes.byref(ptr), None, 0,
+                               err, len(err)), err)
+    try:
+        out = ctypes.c_double()
+        _check(lib.sss_camera_pixels_per_metre(
+            lib.sss_scene_camera(ptr), width, height, depth,
+            ctypes.byref(out), err, len(err)), err)
+        return out.value
     finally:
         lib.sss_scene_free(ptr)
 

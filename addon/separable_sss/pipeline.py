@@ -17,7 +17,8 @@ import numpy as np
 from . import analysis, live, native, nodes, preferences, transmission
 from . import blender_compat as compat
 from .analysis import Analysis, Found, analyse  # noqa: F401
-from .description import (library_material, scene_description,  # noqa: F401
+from .description import (camera_pixels_per_metre,  # noqa: F401
+                          library_material, scene_description,
                           write_description)
 from .errors import SSSError
 from .switch_off import switched_off
@@ -249,5 +250,5 @@ def kernel_pixels(scene, found):
     if not distance:
         return 0.0
     px = support_metres(scene, found) * \
-        analysis.camera_pixels_per_metre(scene, distance)
+        camera_pixels_per_metre(scene, distance)
     return round(px, 1) if math.isfinite(px) else 0.0

@@ -31,8 +31,7 @@ from mathutils import Vector
 
 from . import blender_compat as compat
 from . import native
-from .analysis import camera_pixels_per_metre
-from .description import library_material, slab
+from .description import camera_pixels_per_metre, library_material, slab
 from .lighting import (lights_behind, model,  # noqa: F401 (model: API)
                        objects_with, transmitting)
 

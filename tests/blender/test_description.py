@@ -128,3 +128,31 @@ def test_required_passes_are_the_librarys(scene):
     with pipeline.switched_off(scene, analysis.analyse(scene),
                                backlight=False):
         assert all(getattr(layer, "use_pass_" + p) for p in required)
+
+
+def test_kernel_width_comes_from_the_camera_model(scene):
+    """Found in Scene's blur width uses the library's projection (Blender's
+    sensor fit, pixel aspect, unit scale), not a copy of it."""
+    cam = scene.camera.data
+    render = scene.render
+    saved = (cam.type, cam.lens, cam.sensor_width, cam.sensor_fit,
+             render.resolution_x, render.resolution_y,
+             render.resolution_percentage, render.pixel_aspect_x)
+    try:
+        cam.type, cam.lens, cam.sensor_width = 'PERSP', 50.0, 36.0
+        cam.sensor_fit = 'AUTO'
+        render.resolution_x, render.resolution_y = 400, 300
+        render.resolution_percentage, render.pixel_aspect_x = 50, 1.0
+        ppm = description.camera_pixels_per_metre(scene, 2.0)
+        assert ppm == pytest.approx(200 * 50.0 / (36.0 * 2.0), rel=1e-9)
+        render.pixel_aspect_x = 2.0     # wider pixels: the fit goes by it
+        cam.sensor_fit = 'VERTICAL'
+        assert description.camera_pixels_per_metre(scene, 2.0) == \
+            pytest.approx(0.5 * 150 * 50.0 / (cam.sensor_height * 2.0),
+                          rel=1e-9)
+        found = pipeline.analyse(scene).materials[0]
+        assert pipeline.kernel_pixels(scene, found) > 0.0
+    finally:
+        (cam.type, cam.lens, cam.sensor_width, cam.sensor_fit,
+         render.resolution_x, render.resolution_y,
+         render.resolution_percentage, render.pixel_aspect_x) = saved
