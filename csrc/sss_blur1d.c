@@ -3,6 +3,8 @@
  * give the same bits (see sss_blur1d.h). */
 #include "sss_blur1d.h"
 
+#include <math.h>
+
 /* Lanes summed as the vector code does: ((l0+l4)+(l2+l6))+((l1+l5)+(l3+l7)). */
 static inline float lane_sum(const float l[SSS__LANES])
 {
@@ -35,21 +37,29 @@ void sss__blur1d_scalar(sss__blur1d *b)
 	}
 }
 
-void sss__blur1d_samples_scalar(sss__blur1d *b, const sss__samples *l)
+void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t)
 {
 	float acc[3][SSS__LANES] = {{0}}, ws[3][SSS__LANES] = {{0}};
-	for (int32_t k = 0; k < l->count; k++) {
-		int lane = (int)(k % SSS__LANES);
-		int32_t s = l->s[k], j = b->i + s;
-		float q = sss__blur1d_q(b, j, s);
-		int valid = q < b->cut_q;
-		for (int c = 0; c < 3; c++) {
-			float w = valid ? l->w[c][k] : 0.0f;
-			float wgt = w * sss__blur1d_rho(q, l->a8[c][k]);
-			acc[c][lane] += wgt * b->rgb[c][j];
-			ws[c][lane] += wgt;
-		}
-	}
+	for (int32_t k0 = 0; k0 < t->count; k0 += SSS__LANES)
+		for (int e = 0; e < 2; e++)
+			for (int lane = 0; lane < SSS__LANES; lane++) {
+				int32_t k = k0 + lane;
+				float o = t->at[k] * b->r;
+				float fl = floorf(o);
+				float f = o - fl;
+				float share = e ? f : 1.0f - f;
+				int32_t j = b->i + (int32_t)fl + e;
+				int in = j >= 0 && j < b->len;
+				j = j < 0 ? 0 : j >= b->len ? b->len - 1 : j;
+				float q = sss__blur1d_q(b, j, j - b->i);
+				int valid = in && b->slot[j] == b->slot_c && q < b->cut_q;
+				for (int c = 0; c < 3; c++) {
+					float w = valid ? share * t->w[c][k] : 0.0f;
+					float wgt = w * sss__blur1d_rho(q, t->a8[c][k]);
+					acc[c][lane] += wgt * b->rgb[c][j];
+					ws[c][lane] += wgt;
+				}
+			}
 	for (int c = 0; c < 3; c++) {
 		b->acc[c] = lane_sum(acc[c]);
 		b->wsum[c] = lane_sum(ws[c]);

@@ -32,8 +32,9 @@ typedef struct sss__blur1d {
 	const float *rgb[3];   /* light, planar; 0 where nothing scatters */
 	const float *z;        /* depth (depth mode) */
 	const float *geo[3];   /* surface positions (position mode), or NULL */
-	const int16_t *slot;   /* kernel per pixel, -1 = does not scatter */
+	const int32_t *slot;   /* kernel per pixel, -1 = does not scatter */
 	int32_t i;             /* the centre pixel */
+	int32_t len;           /* pixels in the row */
 	int64_t readable;      /* elements every array holds from the row start */
 	int32_t s_lo, s_hi;    /* sample offsets from the centre, inclusive */
 	int16_t slot_c;
@@ -47,6 +48,7 @@ typedef struct sss__blur1d {
 	float off_axis, ife, two_xt, cz, upp;
 	float cut_q;           /* squared support */
 	float f;               /* interpolation between row0 and row1 */
+	float r;               /* sparse taps: the half-width, pixels */
 	/* Table rows, indexed by s: W_c at [c * stride + s], A_c / 8 at
 	 * [(3 + c) * stride + s]; readable over [s_lo, s_hi + 7]. */
 	const float *row0, *row1;
@@ -89,21 +91,24 @@ static inline float sss__blur1d_rho(float q, float a8)
 	return t4 * t4;
 }
 
-/* Samples anywhere along the row (sparse layouts: each tap reads the two
- * pixels around it): sample k is pixel i + s[k] with weights w_c[k] (the
- * tap's W times the pixel's share of it) and A_c/8 in a8_c[k]. Only
- * samples on the centre's material are listed; the arrays are padded with
- * zero weights (s = 0) to a multiple of SSS__LANES. The row fields of the
- * sss__blur1d are used, not the table rows. */
-typedef struct sss__samples {
+/* Taps anywhere along the row (sparse layouts): tap k lies at at[k] r
+ * pixels from the centre (signed; r = the sss__blur1d's) and weighs w_c[k]
+ * (W over its cell), with A_c/8 in a8_c[k]. It is read by linear
+ * interpolation: with o = at[k] r, the pixels i + floor(o) and one right of
+ * it take the shares 1 - frac(o) and frac(o) of w_c[k], each with its own
+ * falloff rho, and only where it lies in the row on the centre's material.
+ * The arrays are padded with zero weights to a multiple of SSS__LANES; tap
+ * k goes to lane k mod 8, its left pixel before its right one. The row
+ * fields of the sss__blur1d are used, not the table rows. */
+typedef struct sss__taps {
 	int32_t count;         /* a multiple of SSS__LANES */
-	int32_t *s;
+	float *at;
 	float *w[3], *a8[3];
-} sss__samples;
+} sss__taps;
 
 void sss__blur1d_scalar(sss__blur1d *b);
-void sss__blur1d_samples_scalar(sss__blur1d *b, const sss__samples *l);
-void sss__blur1d_samples_avx2(sss__blur1d *b, const sss__samples *l);
+void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t);
+void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t);
 /* Same result, AVX2; only call when sss__blur1d_avx2_supported(). */
 void sss__blur1d_avx2(sss__blur1d *b);
 int sss__blur1d_avx2_supported(void);

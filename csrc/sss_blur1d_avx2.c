@@ -64,8 +64,8 @@ AVX2 static inline float lane_sum(__m256 v)
 			                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));      \
 		}                                                                     \
 		q = _mm256_max_ps(q, zero); /* NaN -> 0, as in sss__blur1d_q */       \
-		__m256i slots = _mm256_cvtepi16_epi32(                                \
-			_mm_loadu_si128((const __m128i *)(const void *)(sp)));            \
+		__m256i slots = _mm256_loadu_si256(                                   \
+			(const __m256i *)(const void *)(sp));                             \
 		__m256 valid = _mm256_and_ps(                                         \
 			_mm256_castsi256_ps(_mm256_and_si256(                             \
 				_mm256_cmpeq_epi32(slots, slot_c), (lanes))),                  \
@@ -110,7 +110,7 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 	const float *g0 = geo ? b->geo[0] + b->i : NULL,
 	            *g1 = geo ? b->geo[1] + b->i : NULL,
 	            *g2 = geo ? b->geo[2] + b->i : NULL;
-	const int16_t *sr = b->slot + b->i;
+	const int32_t *sr = b->slot + b->i;
 	__m256 acc0 = zero, acc1 = zero, acc2 = zero;
 	__m256 ws0 = zero, ws1 = zero, ws2 = zero;
 	int32_t s = b->s_lo;
@@ -130,7 +130,7 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 			           geo ? g2 + s : NULL, sr + s, lanes);
 		} else {
 			float st[7][SSS__LANES];
-			int16_t slot_t[SSS__LANES];
+			int32_t slot_t[SSS__LANES];
 			for (int l = 0; l < SSS__LANES; l++) {
 				int in = l < n;
 				for (int c = 0; c < 3; c++) {
@@ -138,7 +138,7 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 					st[3 + c][l] = in && geo ? b->geo[c][j + l] : b->gc[c];
 				}
 				st[6][l] = in && !geo ? b->z[j + l] : b->zc;
-				slot_t[l] = in ? b->slot[j + l] : (int16_t)-2;
+				slot_t[l] = in ? b->slot[j + l] : -2;
 			}
 			DENSE_STEP(st[0], st[1], st[2], st[6], st[3], st[4], st[5],
 			           slot_t, lanes);
@@ -152,56 +152,78 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 	b->wsum[2] = lane_sum(ws2);
 }
 
-/* Sparse samples: the same arithmetic on gathered pixels. */
-AVX2 void sss__blur1d_samples_avx2(sss__blur1d *b, const sss__samples *l)
+/* Sparse taps: the same arithmetic on gathered pixels, each tap's two
+ * pixels in turn (sss__blur1d_taps_scalar's order). */
+AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
-	const __m256 cut = _mm256_set1_ps(b->cut_q);
+	const __m256 cut = _mm256_set1_ps(b->cut_q), r = _mm256_set1_ps(b->r);
 	const __m256i centre = _mm256_set1_epi32(b->i);
+	const __m256i len = _mm256_set1_epi32(b->len);
+	const __m256i last = _mm256_set1_epi32(b->len - 1);
+	const __m256i none = _mm256_set1_epi32(-1);
+	const __m256i slot_c = _mm256_set1_epi32(b->slot_c);
 	const __m256 zc = _mm256_set1_ps(b->zc), off = _mm256_set1_ps(b->off_axis);
 	const __m256 ife = _mm256_set1_ps(b->ife), two_xt = _mm256_set1_ps(b->two_xt);
 	const __m256 cz = _mm256_set1_ps(b->cz), upp = _mm256_set1_ps(b->upp);
 	const int geo = b->geo[0] != NULL;
 	__m256 acc[3] = {zero, zero, zero}, ws[3] = {zero, zero, zero};
-	for (int32_t k = 0; k < l->count; k += SSS__LANES) {
-		__m256i s = _mm256_loadu_si256((const __m256i *)(const void *)(l->s + k));
-		__m256i j = _mm256_add_epi32(centre, s);
-		__m256 sf = _mm256_cvtepi32_ps(s);
-		__m256 q;
-		if (geo) {
-			__m256 dx = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[0], j, 4),
-			                          _mm256_set1_ps(b->gc[0]));
-			__m256 dy = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[1], j, 4),
-			                          _mm256_set1_ps(b->gc[1]));
-			__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[2], j, 4),
-			                          _mm256_set1_ps(b->gc[2]));
-			__m256 xt = _mm256_mul_ps(sf, upp);
-			q = _mm256_sub_ps(
-				_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),
-				                            _mm256_mul_ps(dy, dy)),
-				              _mm256_mul_ps(dz, dz)),
-				_mm256_mul_ps(xt, xt));
-		} else {
-			__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->z, j, 4), zc);
-			__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(j), off);
-			__m256 e = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);
-			__m256 xt2 = _mm256_mul_ps(sf, two_xt);
-			q = _mm256_add_ps(_mm256_mul_ps(e, _mm256_add_ps(e, xt2)),
-			                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));
-		}
-		q = _mm256_max_ps(q, zero);
-		__m256 valid = _mm256_cmp_ps(q, cut, _CMP_LT_OQ);
-		for (int c = 0; c < 3; c++) {
-			__m256 w = _mm256_and_ps(_mm256_loadu_ps(l->w[c] + k), valid);
-			__m256 a = _mm256_loadu_ps(l->a8[c] + k);
-			__m256 t = _mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(q, a)),
-			                         zero);
-			__m256 t2 = _mm256_mul_ps(t, t);
-			__m256 t4 = _mm256_mul_ps(t2, t2);
-			__m256 wgt = _mm256_mul_ps(w, _mm256_mul_ps(t4, t4));
-			acc[c] = _mm256_add_ps(acc[c], _mm256_mul_ps(wgt,
-				_mm256_i32gather_ps(b->rgb[c], j, 4)));
-			ws[c] = _mm256_add_ps(ws[c], wgt);
+	for (int32_t k = 0; k < t->count; k += SSS__LANES) {
+		__m256 o = _mm256_mul_ps(_mm256_loadu_ps(t->at + k), r);
+		__m256 fl = _mm256_floor_ps(o);
+		__m256 f = _mm256_sub_ps(o, fl);
+		__m256i j0 = _mm256_add_epi32(centre, _mm256_cvttps_epi32(fl));
+		for (int e = 0; e < 2; e++) {
+			__m256 share = e ? f : _mm256_sub_ps(one, f);
+			__m256i j = e ? _mm256_sub_epi32(j0, none) : j0;
+			/* in the row: j > -1 and j < len */
+			__m256i in = _mm256_and_si256(_mm256_cmpgt_epi32(j, none),
+			                              _mm256_cmpgt_epi32(len, j));
+			j = _mm256_min_epi32(_mm256_max_epi32(j, _mm256_setzero_si256()),
+			                     last);
+			__m256 sf = _mm256_cvtepi32_ps(_mm256_sub_epi32(j, centre));
+			__m256 q;
+			if (geo) {
+				__m256 dx = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[0], j, 4),
+				                          _mm256_set1_ps(b->gc[0]));
+				__m256 dy = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[1], j, 4),
+				                          _mm256_set1_ps(b->gc[1]));
+				__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[2], j, 4),
+				                          _mm256_set1_ps(b->gc[2]));
+				__m256 xt = _mm256_mul_ps(sf, upp);
+				q = _mm256_sub_ps(
+					_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),
+					                            _mm256_mul_ps(dy, dy)),
+					              _mm256_mul_ps(dz, dz)),
+					_mm256_mul_ps(xt, xt));
+			} else {
+				__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->z, j, 4), zc);
+				__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(j), off);
+				__m256 ee = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);
+				__m256 xt2 = _mm256_mul_ps(sf, two_xt);
+				q = _mm256_add_ps(_mm256_mul_ps(ee, _mm256_add_ps(ee, xt2)),
+				                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));
+			}
+			q = _mm256_max_ps(q, zero);
+			__m256i same = _mm256_cmpeq_epi32(
+				_mm256_i32gather_epi32((const int *)(const void *)b->slot, j, 4),
+				slot_c);
+			__m256 valid = _mm256_and_ps(
+				_mm256_castsi256_ps(_mm256_and_si256(in, same)),
+				_mm256_cmp_ps(q, cut, _CMP_LT_OQ));
+			for (int c = 0; c < 3; c++) {
+				__m256 w = _mm256_and_ps(
+					_mm256_mul_ps(share, _mm256_loadu_ps(t->w[c] + k)), valid);
+				__m256 a = _mm256_loadu_ps(t->a8[c] + k);
+				__m256 tt = _mm256_max_ps(
+					_mm256_sub_ps(one, _mm256_mul_ps(q, a)), zero);
+				__m256 t2 = _mm256_mul_ps(tt, tt);
+				__m256 t4 = _mm256_mul_ps(t2, t2);
+				__m256 wgt = _mm256_mul_ps(w, _mm256_mul_ps(t4, t4));
+				acc[c] = _mm256_add_ps(acc[c], _mm256_mul_ps(wgt,
+					_mm256_i32gather_ps(b->rgb[c], j, 4)));
+				ws[c] = _mm256_add_ps(ws[c], wgt);
+			}
 		}
 	}
 	for (int c = 0; c < 3; c++) {
@@ -222,9 +244,9 @@ void sss__blur1d_avx2(sss__blur1d *b)
 	sss__blur1d_scalar(b);
 }
 
-void sss__blur1d_samples_avx2(sss__blur1d *b, const sss__samples *l)
+void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t)
 {
-	sss__blur1d_samples_scalar(b, l);
+	sss__blur1d_taps_scalar(b, t);
 }
 
 #endif

@@ -56,6 +56,7 @@ typedef struct table {
 	float *dense;
 	/* Sparse: taps 0..half at offsets r * sparse_at[t], with W and A/8. */
 	float *sparse_at, *sparse_w; /* sparse_w: [t * PARAMS + p] */
+	sss__taps sparse;            /* the same taps, both sides */
 	/* Half-widths of the pixels that use dense rows, both axes. */
 	double r_min, r_max;
 	/* Per axis, pixels whose kernel a limit cut (max_support_px): one
@@ -147,6 +148,49 @@ static float *dense_row(const table *t, int32_t j)
 	       t->dense_half;
 }
 
+/* Floats per array of an sss__taps for taps 0..n, both sides. */
+static size_t taps_size(int32_t n)
+{
+	return ((size_t)2 * n + 1 + SSS__LANES - 1) / SSS__LANES * SSS__LANES;
+}
+
+/* Points l's arrays into m (7 taps_size(n) floats). */
+static void taps_point(sss__taps *l, float *m, int32_t n)
+{
+	size_t size = taps_size(n);
+	l->at = m;
+	for (int c = 0; c < 3; c++) {
+		l->w[c] = m + (1 + c) * size;
+		l->a8[c] = m + (4 + c) * size;
+	}
+}
+
+/* Taps 0..n at offsets at[t] (units of the half-width) with weights
+ * wa[t * PARAMS + p] as both sides' taps: the centre, then each tap left
+ * and right of it, padded with zero weights. */
+static void both_sides(int32_t n, const float *at, const float *wa,
+                       sss__taps *l)
+{
+	int32_t m = 0;
+	for (int32_t t = 0; t <= n; t++) {
+		const float *p = wa + (size_t)t * PARAMS;
+		for (int sign = -1; sign <= (t ? 1 : -1); sign += 2) {
+			l->at[m] = sign * at[t];
+			for (int c = 0; c < 3; c++) {
+				l->w[c][m] = p[c];
+				l->a8[c][m] = p[3 + c];
+			}
+			m++;
+		}
+	}
+	for (; m % SSS__LANES; m++) {
+		l->at[m] = 0.0f;
+		for (int c = 0; c < 3; c++)
+			l->w[c][m] = l->a8[c][m] = 0.0f;
+	}
+	l->count = m;
+}
+
 /* Rows for every half-width in [r_min, r_max] and the sparse taps. */
 static sss_result table_build(const sss__kernel *k, table *t)
 {
@@ -173,6 +217,11 @@ static sss_result table_build(const sss__kernel *k, table *t)
 			            tap[i].hi - tap[i].offset, k->support / r, p, p + 3);
 		}
 	}
+	t->sparse.at = malloc(taps_size(half) * 7 * sizeof(float));
+	if (!t->sparse.at)
+		return SSS_ERR_OUT_OF_MEMORY;
+	taps_point(&t->sparse, t->sparse.at, half);
+	both_sides(half, t->sparse_at, t->sparse_w, &t->sparse);
 	if (!(t->r_max >= t->r_min) || half > DENSE_MAX_HALF)
 		return SSS_OK;
 	t->j0 = (int32_t)((t->r_min - 1.0) * R_STEPS);
@@ -204,6 +253,7 @@ static void table_free(table *t)
 	free(t->dense);
 	free(t->sparse_at);
 	free(t->sparse_w);
+	free(t->sparse.at);
 	for (int a = 0; a < 2; a++) {
 		free(t->cap[a].at);
 		free(t->cap[a].wa);
@@ -216,7 +266,7 @@ typedef struct plane {
 	float *rgb[3];         /* planar light, 0 where nothing scatters */
 	float *z;              /* depth */
 	float *geo[3];         /* positions (Position pass), or NULL */
-	int16_t *slot;
+	int32_t *slot;         /* the job's, widened for the vector loop */
 } plane;
 
 /* The projection along and across the rows. */
@@ -315,68 +365,26 @@ static int cap_weights(const struct capped *c, double upp, float *wa)
 	return 1;
 }
 
-/* Per band of rows: room for one pixel's per-pixel taps and its list of
- * sparse samples (four per tap: two pixels on either side, plus padding). */
+/* Per band of rows: room for one pixel's per-pixel taps, both sides. */
 typedef struct scratch {
 	sss__tap *tap;
 	float *at, *wa;
-	sss__samples list;
+	sss__taps taps;
 } scratch;
 
 static void *scratch_new(scratch *sc, int32_t half)
 {
-	size_t taps = (size_t)half + 1, n = 4 * taps + SSS__LANES;
+	size_t taps = (size_t)half + 1;
 	char *m = malloc(taps * sizeof *sc->tap +
-	                 taps * (1 + PARAMS) * sizeof(float) +
-	                 n * (sizeof(int32_t) + 6 * sizeof(float)));
+	                 (taps * (1 + PARAMS) + 7 * taps_size(half)) *
+	                 sizeof(float));
 	if (!m)
 		return NULL;
 	sc->tap = (sss__tap *)(void *)m;
 	sc->at = (float *)(void *)(sc->tap + taps);
 	sc->wa = sc->at + taps;
-	float *f = sc->wa + taps * PARAMS;
-	for (int c = 0; c < 3; c++) {
-		sc->list.w[c] = f + c * n;
-		sc->list.a8[c] = f + (3 + c) * n;
-	}
-	sc->list.s = (int32_t *)(void *)(f + 6 * n);
+	taps_point(&sc->taps, sc->wa + taps * PARAMS, half);
 	return m;
-}
-
-/* The samples of taps 0..n at offsets at[t] r: the two pixels around each
- * tap, by linear interpolation, where they are on the centre's material. */
-static void list_samples(const sss__blur1d *b, int32_t len, int32_t n,
-                         const float *at, double r, const float *wa,
-                         sss__samples *l)
-{
-	int32_t m = 0;
-	for (int32_t t = 0; t <= n; t++) {
-		const float *p = wa + (size_t)t * PARAMS;
-		for (int sign = -1; sign <= (t ? 1 : -1); sign += 2) {
-			double pos = b->i + sign * at[t] * r;
-			double fl = floor(pos);
-			double f = pos - fl;
-			for (int e = 0; e < 2; e++) {
-				int32_t j = (int32_t)fl + e;
-				double share = e ? f : 1.0 - f;
-				if (share <= 0.0 || j < 0 || j >= len ||
-				    b->slot[j] != b->slot_c)
-					continue;
-				l->s[m] = j - b->i;
-				for (int c = 0; c < 3; c++) {
-					l->w[c][m] = (float)(share * p[c]);
-					l->a8[c][m] = p[3 + c];
-				}
-				m++;
-			}
-		}
-	}
-	for (; m % SSS__LANES; m++) {
-		l->s[m] = 0;
-		for (int c = 0; c < 3; c++)
-			l->w[c][m] = l->a8[c][m] = 0.0f;
-	}
-	l->count = m;
 }
 
 /* What every pixel of row `row` of ctx->in shares; for a perspective
@@ -395,6 +403,7 @@ static void row_template(const pass_ctx *ctx, int32_t row, sss__blur1d *b)
 	b->z = pl->z + base;
 	b->slot = pl->slot + base;
 	b->readable = (int64_t)pl->len * (pl->rows - row);
+	b->len = pl->len;
 	b->off_axis = (float)(0.5 - ax->c);
 	b->ife = ax->ortho ? 0.0f : (float)(1.0 / ax->f);
 	b->two_xt = (float)(2.0 / ax->f);
@@ -409,7 +418,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 {
 	const sss__job *job = ctx->job;
 	const plane *pl = &ctx->in;
-	int16_t slot = row->slot[i];
+	int32_t slot = row->slot[i];
 	const sss__kernel *k = &job->kernels[slot];
 	const table *t = &ctx->tables[slot];
 	float zc = row->z[i];
@@ -421,7 +430,8 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 	const axis *ax = &ctx->ax;
 	sss__blur1d b = *row;
 	b.i = i;
-	b.slot_c = slot;
+	b.slot_c = (int16_t)slot;
+	b.r = (float)r;
 	b.zc = zc;
 	b.cut_q = t->cut_q;
 	if (!ax->ortho) {
@@ -449,16 +459,16 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 		else
 			sss__blur1d_scalar(&b);
 	} else {
+		const sss__taps *taps = &sc->taps;
 		if (!capped && r >= t->half + 0.5) {
-			list_samples(&b, pl->len, t->half, t->sparse_at, r, t->sparse_w,
-			             &sc->list);
+			taps = &t->sparse;
 		} else if (capped && t->cap[!ctx->first].r == r &&
 		           cap_weights(&t->cap[!ctx->first],
 		                       ax->ortho ? 1.0 / ax->f : zc / ax->f,
 		                       sc->wa)) {
 			/* A limit cut the kernel: its weights from the table. */
-			list_samples(&b, pl->len, t->cap[!ctx->first].n,
-			             t->cap[!ctx->first].at, r, sc->wa, &sc->list);
+			both_sides(t->cap[!ctx->first].n, t->cap[!ctx->first].at, sc->wa,
+			           &sc->taps);
 		} else {
 			/* Weights for this pixel alone: the tap budget is too large
 			 * to tabulate, or the depth lies outside the table. */
@@ -471,12 +481,12 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 				tap_weights(k, tp->offset, tp->offset - tp->lo,
 				            tp->hi - tp->offset, 1.0 / ppu, p, p + 3);
 			}
-			list_samples(&b, pl->len, n, sc->at, r, sc->wa, &sc->list);
+			both_sides(n, sc->at, sc->wa, &sc->taps);
 		}
 		if (ctx->avx2)
-			sss__blur1d_samples_avx2(&b, &sc->list);
+			sss__blur1d_taps_avx2(&b, taps);
 		else
-			sss__blur1d_samples_scalar(&b, &sc->list);
+			sss__blur1d_taps_scalar(&b, taps);
 	}
 	for (int c = 0; c < 3; c++)
 		out[c] = b.wsum[c] > 0.0f ? b.acc[c] / b.wsum[c] : row->rgb[c][i];
@@ -499,6 +509,8 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 			memset(out->rgb[c] + o, 0, n * sizeof(float));
 		memset(out->slot + o, 0xff, n * sizeof *out->slot); /* -1 */
 	}
+	for (size_t i = (size_t)y0 * w; i < (size_t)y1 * w; i++)
+		in->slot[i] = job->slot[i];
 	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
 		int32_t ye = yb + BLOCK < y1 ? yb + BLOCK : y1;
 		for (int32_t x = 0; x < w; x++)
@@ -547,7 +559,7 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 		int32_t first = len, last = -1;
 		for (int32_t r = rb; r < re; r++) {
 			row_template(ctx, r, &tpl[r - rb]);
-			const int16_t *sl = in->slot + (size_t)r * len;
+			const int32_t *sl = in->slot + (size_t)r * len;
 			int32_t a = 0, b = len - 1;
 			while (a < first && sl[a] < 0)
 				a++;
@@ -559,7 +571,7 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 		for (int32_t pos = first; pos <= last; pos++)
 			for (int32_t r = rb; r < re; r++) {
 				size_t i = (size_t)r * len + pos, o = (size_t)pos * rows + r;
-				int16_t slot = in->slot[i];
+				int32_t slot = in->slot[i];
 				if (slot < 0)
 					continue;
 				float b[3];
@@ -699,8 +711,8 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	size_t hn = (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 4 : 1;
 	float *hbuf = hn ? calloc(npix * hn, sizeof *hbuf) : NULL;
 	float *vbuf = calloc(npix * vn, sizeof *vbuf);
-	int16_t *vslot = malloc(npix * sizeof *vslot);
-	if (!tables || (hn && !hbuf) || !vbuf || !vslot)
+	int32_t *slots = malloc(2 * npix * sizeof *slots);
+	if (!tables || (hn && !hbuf) || !vbuf || !slots)
 		goto done;
 	/* The transposed light lives in the job's scratch image (fill_rows
 	 * clears it). */
@@ -709,8 +721,8 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 		vp.rgb[c] = job->scratch + c * npix;
 	}
 	vp.z = vbuf;
-	vp.slot = vslot;
-	hp.slot = (int16_t *)job->slot;
+	hp.slot = slots;
+	vp.slot = slots + npix;
 	hp.z = copy_z ? hbuf : (float *)job->depth;
 	if (geo)
 		for (int c = 0; c < 3; c++) {
@@ -754,7 +766,7 @@ done:
 	free(tables);
 	free(vbuf);
 	free(hbuf);
-	free(vslot);
+	free(slots);
 	return r;
 }
 
