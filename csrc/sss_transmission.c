@@ -533,6 +533,8 @@ void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
 		if (b[c] < 0.0)
 			b[c] = 0.0; /* no negative light crosses */
 	}
+	if (b[0] == 0.0 && b[1] == 0.0 && b[2] == 0.0)
+		return; /* no light from behind here: nothing to carry */
 	double facing = t->facing.data ? sss__at(&t->facing, x, y)[0] : 1.0;
 	double tt = mt->thickness_scale == 0.0 ? 0.0
 	            : thick * mt->thickness_scale;
