@@ -37,10 +37,11 @@ void sss__blur1d_scalar(sss__blur1d *b)
 	}
 }
 
-void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t)
+void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t, int32_t v0,
+                             int32_t v1)
 {
 	float acc[3][SSS__LANES] = {{0}}, ws[3][SSS__LANES] = {{0}};
-	for (int32_t k0 = 0; k0 < t->count; k0 += SSS__LANES)
+	for (int32_t k0 = v0 * SSS__LANES; k0 < v1 * SSS__LANES; k0 += SSS__LANES)
 		for (int e = 0; e < 2; e++)
 			for (int lane = 0; lane < SSS__LANES; lane++) {
 				int32_t k = k0 + lane;

@@ -99,16 +99,21 @@ static inline float sss__blur1d_rho(float q, float a8)
  * falloff rho, and only where it lies in the row on the centre's material.
  * The arrays are padded with zero weights to a multiple of SSS__LANES; tap
  * k goes to lane k mod 8, its left pixel before its right one. The row
- * fields of the sss__blur1d are used, not the table rows. */
+ * fields of the sss__blur1d are used, not the table rows. cell[v]: the
+ * narrowest cell of vector v's taps, in units of r. */
 typedef struct sss__taps {
 	int32_t count;         /* a multiple of SSS__LANES */
 	float *at;
 	float *w[3], *a8[3];
+	float *cell;           /* count / SSS__LANES */
 } sss__taps;
 
 void sss__blur1d_scalar(sss__blur1d *b);
-void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t);
-void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t);
+/* Taps of vectors v0 .. v1 - 1 (taps 8 v0 .. 8 v1 - 1) only. */
+void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t, int32_t v0,
+                             int32_t v1);
+void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t, int32_t v0,
+                           int32_t v1);
 /* Same result, AVX2; only call when sss__blur1d_avx2_supported(). */
 void sss__blur1d_avx2(sss__blur1d *b);
 int sss__blur1d_avx2_supported(void);

@@ -154,7 +154,8 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 
 /* Sparse taps: the same arithmetic on gathered pixels, each tap's two
  * pixels in turn (sss__blur1d_taps_scalar's order). */
-AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t)
+AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t,
+                                int32_t v0, int32_t v1)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 cut = _mm256_set1_ps(b->cut_q), r = _mm256_set1_ps(b->r);
@@ -168,7 +169,7 @@ AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t)
 	const __m256 cz = _mm256_set1_ps(b->cz), upp = _mm256_set1_ps(b->upp);
 	const int geo = b->geo[0] != NULL;
 	__m256 acc[3] = {zero, zero, zero}, ws[3] = {zero, zero, zero};
-	for (int32_t k = 0; k < t->count; k += SSS__LANES) {
+	for (int32_t k = v0 * SSS__LANES; k < v1 * SSS__LANES; k += SSS__LANES) {
 		__m256 o = _mm256_mul_ps(_mm256_loadu_ps(t->at + k), r);
 		__m256 fl = _mm256_floor_ps(o);
 		__m256 f = _mm256_sub_ps(o, fl);
@@ -244,9 +245,10 @@ void sss__blur1d_avx2(sss__blur1d *b)
 	sss__blur1d_scalar(b);
 }
 
-void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t)
+void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t, int32_t v0,
+                           int32_t v1)
 {
-	sss__blur1d_taps_scalar(b, t);
+	sss__blur1d_taps_scalar(b, t, v0, v1);
 }
 
 #endif

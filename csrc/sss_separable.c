@@ -154,7 +154,10 @@ static size_t taps_size(int32_t n)
 	return ((size_t)2 * n + 1 + SSS__LANES - 1) / SSS__LANES * SSS__LANES;
 }
 
-/* Points l's arrays into m (7 taps_size(n) floats). */
+/* Floats an sss__taps for taps 0..n takes. */
+#define TAPS_FLOATS(n) (7 * taps_size(n) + taps_size(n) / SSS__LANES)
+
+/* Points l's arrays into m (TAPS_FLOATS(n) floats). */
 static void taps_point(sss__taps *l, float *m, int32_t n)
 {
 	size_t size = taps_size(n);
@@ -163,6 +166,7 @@ static void taps_point(sss__taps *l, float *m, int32_t n)
 		l->w[c] = m + (1 + c) * size;
 		l->a8[c] = m + (4 + c) * size;
 	}
+	l->cell = m + 7 * size;
 }
 
 /* Taps 0..n at offsets at[t] (units of the half-width) with weights
@@ -174,7 +178,13 @@ static void both_sides(int32_t n, const float *at, const float *wa,
 	int32_t m = 0;
 	for (int32_t t = 0; t <= n; t++) {
 		const float *p = wa + (size_t)t * PARAMS;
+		/* the cell reaches halfway to the neighbouring taps */
+		float cell = n == 0 ? 0.0f : t == 0 ? at[1]
+		             : 0.5f * (at[t < n ? t + 1 : t] - at[t - 1]);
 		for (int sign = -1; sign <= (t ? 1 : -1); sign += 2) {
+			int32_t v = m / SSS__LANES;
+			if (m % SSS__LANES == 0 || cell < l->cell[v])
+				l->cell[v] = cell;
 			l->at[m] = sign * at[t];
 			for (int c = 0; c < 3; c++) {
 				l->w[c][m] = p[c];
@@ -217,7 +227,7 @@ static sss_result table_build(const sss__kernel *k, table *t)
 			            tap[i].hi - tap[i].offset, k->support / r, p, p + 3);
 		}
 	}
-	t->sparse.at = malloc(taps_size(half) * 7 * sizeof(float));
+	t->sparse.at = malloc(TAPS_FLOATS(half) * sizeof(float));
 	if (!t->sparse.at)
 		return SSS_ERR_OUT_OF_MEMORY;
 	taps_point(&t->sparse, t->sparse.at, half);
@@ -376,8 +386,7 @@ static void *scratch_new(scratch *sc, int32_t half)
 {
 	size_t taps = (size_t)half + 1;
 	char *m = malloc(taps * sizeof *sc->tap +
-	                 (taps * (1 + PARAMS) + 7 * taps_size(half)) *
-	                 sizeof(float));
+	                 (taps * (1 + PARAMS) + TAPS_FLOATS(half)) * sizeof(float));
 	if (!m)
 		return NULL;
 	sc->tap = (sss__tap *)(void *)m;
@@ -411,82 +420,247 @@ static void row_template(const pass_ctx *ctx, int32_t row, sss__blur1d *b)
 	b->cz = ax->ortho ? 1.0f : (float)(1.0 + perp * perp);
 }
 
-/* The 1-D blur of row `row` of ctx->in at pixel i into out; 0 if it is
- * the identity there (kernel narrower than a pixel at this depth). */
-static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
-                      int32_t i, scratch *sc, float out[3])
+/* How a pixel's 1-D blur is made. */
+enum { IDENTITY, DENSE, SPARSE };
+
+/* Sparse taps are summed in two parts: the first NEAR_VECTORS vectors
+ * (the centre and the taps next to it) at every pixel, the rest (the far
+ * taps, cells of STRIDE pixels or more) at every STRIDE-th pixel of a row
+ * (the anchors) and interpolated linearly between two anchors. Their sum
+ * changes as slowly along the row as their cells are wide: interpolating
+ * over a cell moves each far sample by less than the cell its one point
+ * already stands for. A pixel takes its own far sum instead where either
+ * anchor is on another material, is cut by a limit where it is not (or
+ * the reverse), has no far taps that wide, or where the depth does not run
+ * straight between them: off the line by more than DEPTH_BEND, or rising
+ * by more than DEPTH_SPAN, of the support (a step, a crease, a grazing
+ * surface). */
+#define NEAR_VECTORS 1
+#define STRIDE 4
+#define DEPTH_BEND 0.002
+#define DEPTH_SPAN 0.05
+
+typedef struct anchor {
+	int32_t pos;     /* position along the row; -1: none */
+	int ok;          /* far sums usable */
+	int32_t slot;
+	int capped;
+	float z;
+	float acc[3], ws[3];
+} anchor;
+
+/* The kind of blur pixel i of the row needs, with its half-width. */
+static int pixel_kind(const pass_ctx *ctx, const sss__blur1d *row,
+                      int32_t i, double *r, int *capped)
+{
+	int32_t slot = row->slot[i];
+	const table *t = &ctx->tables[slot];
+	*r = half_width(ctx->job, &ctx->job->kernels[slot], &ctx->ax,
+	                ctx->in.len, row->z[i], capped);
+	if (!(*r >= 1.0) || t->half == 0)
+		return IDENTITY; /* nothing but the centre within reach */
+	if (!*capped && t->dense && *r < t->dense_half + 0.5)
+		return DENSE;
+	return SPARSE;
+}
+
+/* b for pixel i of the row, of the given kind and half-width; for SPARSE,
+ * its taps (the table's, or made in sc). */
+static const sss__taps *pixel_setup(const pass_ctx *ctx,
+                                    const sss__blur1d *row, int32_t i,
+                                    int kind, double r, int capped,
+                                    scratch *sc, sss__blur1d *b)
 {
 	const sss__job *job = ctx->job;
 	const plane *pl = &ctx->in;
+	const axis *ax = &ctx->ax;
 	int32_t slot = row->slot[i];
 	const sss__kernel *k = &job->kernels[slot];
 	const table *t = &ctx->tables[slot];
 	float zc = row->z[i];
-	int capped;
-	double r = half_width(job, k, &ctx->ax, pl->len, zc, &capped);
-	if (!(r >= 1.0) || t->half == 0)
-		return 0; /* nothing but the centre within reach */
-
-	const axis *ax = &ctx->ax;
-	sss__blur1d b = *row;
-	b.i = i;
-	b.slot_c = (int16_t)slot;
-	b.r = (float)r;
-	b.zc = zc;
-	b.cut_q = t->cut_q;
+	*b = *row;
+	b->i = i;
+	b->slot_c = (int16_t)slot;
+	b->r = (float)r;
+	b->zc = zc;
+	b->cut_q = t->cut_q;
 	if (!ax->ortho) {
-		b.two_xt = zc * row->two_xt;
-		b.upp = zc * row->upp;
+		b->two_xt = zc * row->two_xt;
+		b->upp = zc * row->upp;
 	}
-	if (b.geo[0])
+	if (b->geo[0])
 		for (int c = 0; c < 3; c++)
-			b.gc[c] = b.geo[c][i];
+			b->gc[c] = b->geo[c][i];
 
-	if (!capped && t->dense && r < t->dense_half + 0.5) {
+	if (kind == DENSE) {
 		double fj = (r - 1.0) * R_STEPS;
 		int32_t j = (int32_t)fj;
 		int32_t n = (int32_t)(1.0 + (double)(j + 1) / R_STEPS + 0.5);
 		if (n > t->dense_half)
 			n = t->dense_half;
-		b.f = (float)(fj - j);
-		b.row0 = dense_row(t, j);
-		b.row1 = dense_row(t, j + 1);
-		b.stride = t->stride;
-		b.s_lo = i < n ? -i : -n;
-		b.s_hi = pl->len - 1 - i < n ? pl->len - 1 - i : n;
+		b->f = (float)(fj - j);
+		b->row0 = dense_row(t, j);
+		b->row1 = dense_row(t, j + 1);
+		b->stride = t->stride;
+		b->s_lo = i < n ? -i : -n;
+		b->s_hi = pl->len - 1 - i < n ? pl->len - 1 - i : n;
+		return NULL;
+	}
+	if (!capped && r >= t->half + 0.5)
+		return &t->sparse;
+	if (capped && t->cap[!ctx->first].r == r &&
+	    cap_weights(&t->cap[!ctx->first], ax->ortho ? 1.0 / ax->f : zc / ax->f,
+	                sc->wa)) {
+		/* A limit cut the kernel: its weights from the table. */
+		both_sides(t->cap[!ctx->first].n, t->cap[!ctx->first].at, sc->wa,
+		           &sc->taps);
+		return &sc->taps;
+	}
+	/* Weights for this pixel alone: the tap budget is too large to
+	 * tabulate, or the depth lies outside the table. */
+	double ppu = ax->ortho ? ax->f : ax->f / zc;
+	int32_t n = sss__tap_layout(k->taps, r, sc->tap);
+	for (int32_t s = 0; s <= n; s++) {
+		const sss__tap *tp = &sc->tap[s];
+		float *p = sc->wa + (size_t)s * PARAMS;
+		sc->at[s] = (float)(tp->offset / r);
+		tap_weights(k, tp->offset, tp->offset - tp->lo, tp->hi - tp->offset,
+		            1.0 / ppu, p, p + 3);
+	}
+	both_sides(n, sc->at, sc->wa, &sc->taps);
+	return &sc->taps;
+}
+
+/* The sums of vectors v0 .. v1 - 1 of taps at b's pixel. */
+static void taps_sum(const pass_ctx *ctx, sss__blur1d *b, const sss__taps *t,
+                     int32_t v0, int32_t v1)
+{
+	if (ctx->avx2)
+		sss__blur1d_taps_avx2(b, t, v0, v1);
+	else
+		sss__blur1d_taps_scalar(b, t, v0, v1);
+}
+
+/* Whether b's far taps (past NEAR_VECTORS) have cells of STRIDE pixels. */
+static int far_is_wide(const sss__blur1d *b, const sss__taps *t)
+{
+	return t->count / SSS__LANES > NEAR_VECTORS &&
+	       t->cell[NEAR_VECTORS] * b->r >= (float)STRIDE;
+}
+
+/* The far sums of pixel pos of the row, where it can be an anchor. */
+static void anchor_at(const pass_ctx *ctx, const sss__blur1d *row,
+                      int32_t pos, scratch *sc, anchor *a)
+{
+	a->pos = pos;
+	a->ok = 0;
+	if (pos >= ctx->in.len || row->slot[pos] < 0)
+		return;
+	double r;
+	int capped;
+	if (pixel_kind(ctx, row, pos, &r, &capped) != SPARSE)
+		return;
+	sss__blur1d b;
+	const sss__taps *t = pixel_setup(ctx, row, pos, SPARSE, r, capped, sc,
+	                                 &b);
+	if (!far_is_wide(&b, t))
+		return;
+	taps_sum(ctx, &b, t, NEAR_VECTORS, t->count / SSS__LANES);
+	a->ok = 1;
+	a->slot = row->slot[pos];
+	a->capped = capped;
+	a->z = b.zc;
+	for (int c = 0; c < 3; c++) {
+		a->acc[c] = b.acc[c];
+		a->ws[c] = b.wsum[c];
+	}
+}
+
+/* The 1-D blur of row `row` of ctx->in at pixel i into out; 0 if it is
+ * the identity there (kernel narrower than a pixel at this depth). anc:
+ * the row's last two anchors, kept from pixel to pixel. */
+static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
+                      int32_t i, scratch *sc, anchor anc[2], float out[3])
+{
+	double r;
+	int capped;
+	int kind = pixel_kind(ctx, row, i, &r, &capped);
+	if (kind == IDENTITY)
+		return 0;
+	int32_t d = i % STRIDE;
+	if (kind == SPARSE && d != 0) {
+		/* the anchors left and right of i, first (their taps may use
+		 * sc, which the pixel's own then replace) */
+		int32_t a = i - d;
+		if (anc[0].pos != a) {
+			if (anc[1].pos == a)
+				anc[0] = anc[1];
+			else
+				anchor_at(ctx, row, a, sc, &anc[0]);
+		}
+		if (anc[1].pos != a + STRIDE)
+			anchor_at(ctx, row, a + STRIDE, sc, &anc[1]);
+	}
+	sss__blur1d b;
+	const sss__taps *t = pixel_setup(ctx, row, i, kind, r, capped, sc, &b);
+	if (kind == DENSE) {
 		if (ctx->avx2)
 			sss__blur1d_avx2(&b);
 		else
 			sss__blur1d_scalar(&b);
 	} else {
-		const sss__taps *taps = &sc->taps;
-		if (!capped && r >= t->half + 0.5) {
-			taps = &t->sparse;
-		} else if (capped && t->cap[!ctx->first].r == r &&
-		           cap_weights(&t->cap[!ctx->first],
-		                       ax->ortho ? 1.0 / ax->f : zc / ax->f,
-		                       sc->wa)) {
-			/* A limit cut the kernel: its weights from the table. */
-			both_sides(t->cap[!ctx->first].n, t->cap[!ctx->first].at, sc->wa,
-			           &sc->taps);
-		} else {
-			/* Weights for this pixel alone: the tap budget is too large
-			 * to tabulate, or the depth lies outside the table. */
-			double ppu = ax->ortho ? ax->f : ax->f / zc;
-			int32_t n = sss__tap_layout(k->taps, r, sc->tap);
-			for (int32_t s = 0; s <= n; s++) {
-				const sss__tap *tp = &sc->tap[s];
-				float *p = sc->wa + (size_t)s * PARAMS;
-				sc->at[s] = (float)(tp->offset / r);
-				tap_weights(k, tp->offset, tp->offset - tp->lo,
-				            tp->hi - tp->offset, 1.0 / ppu, p, p + 3);
-			}
-			both_sides(n, sc->at, sc->wa, &sc->taps);
+		int32_t nv = t->count / SSS__LANES;
+		int32_t near = nv < NEAR_VECTORS ? nv : NEAR_VECTORS;
+		float acc[3], ws[3];
+		taps_sum(ctx, &b, t, 0, near);
+		for (int c = 0; c < 3; c++) {
+			acc[c] = b.acc[c];
+			ws[c] = b.wsum[c];
 		}
-		if (ctx->avx2)
-			sss__blur1d_taps_avx2(&b, taps);
-		else
-			sss__blur1d_taps_scalar(&b, taps);
+		const anchor *lo = &anc[0], *hi = &anc[1];
+		double support = ctx->job->kernels[b.slot_c].support;
+		float u = (float)d / STRIDE;
+		int between = d != 0 && lo->ok && hi->ok && lo->slot == b.slot_c &&
+		              hi->slot == b.slot_c && lo->capped == capped &&
+		              hi->capped == capped && far_is_wide(&b, t) &&
+		              fabs((double)hi->z - lo->z) <= DEPTH_SPAN * support &&
+		              fabs(b.zc - (lo->z + u * (hi->z - lo->z))) <=
+		                      DEPTH_BEND * support;
+		if (between) {
+			for (int c = 0; c < 3; c++) {
+				b.acc[c] = lo->acc[c] + u * (hi->acc[c] - lo->acc[c]);
+				b.wsum[c] = lo->ws[c] + u * (hi->ws[c] - lo->ws[c]);
+			}
+		} else if (d == 0 && anc[1].pos == i && anc[1].ok) {
+			/* this pixel is the anchor the last one read: its far
+			 * sums are made */
+			anc[0] = anc[1];
+			for (int c = 0; c < 3; c++) {
+				b.acc[c] = anc[0].acc[c];
+				b.wsum[c] = anc[0].ws[c];
+			}
+		} else if (nv > near) {
+			taps_sum(ctx, &b, t, near, nv);
+			if (d == 0) { /* the next pixels' left anchor */
+				anchor *a = &anc[0];
+				a->pos = i;
+				a->ok = far_is_wide(&b, t);
+				a->slot = b.slot_c;
+				a->capped = capped;
+				a->z = b.zc;
+				for (int c = 0; c < 3; c++) {
+					a->acc[c] = b.acc[c];
+					a->ws[c] = b.wsum[c];
+				}
+			}
+		} else {
+			for (int c = 0; c < 3; c++)
+				b.acc[c] = b.wsum[c] = 0.0f;
+		}
+		for (int c = 0; c < 3; c++) {
+			b.acc[c] += acc[c];
+			b.wsum[c] += ws[c];
+		}
 	}
 	for (int c = 0; c < 3; c++)
 		out[c] = b.wsum[c] > 0.0f ? b.acc[c] / b.wsum[c] : row->rgb[c][i];
@@ -553,6 +727,9 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 	for (int32_t rb = r0; rb < r1; rb += BLOCK) {
 		int32_t re = rb + BLOCK < r1 ? rb + BLOCK : r1;
 		sss__blur1d tpl[BLOCK];
+		anchor anc[BLOCK][2];
+		for (int32_t r = 0; r < BLOCK; r++)
+			anc[r][0].pos = anc[r][1].pos = -1;
 		/* Only the span where the block's rows scatter: a sequential
 		 * scan here, so that the strided walk below (and the work)
 		 * follows the coverage. */
@@ -575,7 +752,7 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 				if (slot < 0)
 					continue;
 				float b[3];
-				if (!blur_pixel(ctx, &tpl[r - rb], pos, &sc, b))
+				if (!blur_pixel(ctx, &tpl[r - rb], pos, &sc, anc[r - rb], b))
 					for (int c = 0; c < 3; c++)
 						b[c] = in->rgb[c][i];
 				if (ctx->first)
