@@ -68,7 +68,10 @@ typedef struct table {
 		double lu0;        /* log(units per pixel) of row 0 */
 		int32_t n, rows;   /* taps right of the centre; rows */
 		float *at;         /* n + 1 offsets in units of r */
-		float *wa;         /* rows x (n + 1) x PARAMS */
+		sss__taps layout;  /* both sides' offsets and cells (its own
+		                      w and a8 unused) */
+		float *sides;      /* rows x 6 x layout.count: W_c, then A_c/8,
+		                      of every tap on both sides */
 		double z_lo, z_hi; /* the depths to cover (scan_half_widths) */
 	} cap[2];
 } table;
@@ -266,7 +269,8 @@ static void table_free(table *t)
 	free(t->sparse.at);
 	for (int a = 0; a < 2; a++) {
 		free(t->cap[a].at);
-		free(t->cap[a].wa);
+		free(t->cap[a].layout.at);
+		free(t->cap[a].sides);
 	}
 }
 
@@ -335,21 +339,33 @@ static sss_result cap_build(const sss__job *job, const sss__kernel *k,
 	if (rows > CAP_MAX_ROWS)
 		return SSS_OK;
 	sss__tap tap[SSS__MAX_HALF_TAPS + 1];
+	float wa[(SSS__MAX_HALF_TAPS + 1) * PARAMS];
 	int32_t n = sss__tap_layout(k->taps, r, tap);
+	size_t size = taps_size(n);
 	c->at = malloc((size_t)(n + 1) * sizeof *c->at);
-	c->wa = malloc((size_t)rows * (n + 1) * PARAMS * sizeof *c->wa);
-	if (!c->at || !c->wa)
+	c->layout.at = malloc(TAPS_FLOATS(n) * sizeof(float));
+	c->sides = malloc((size_t)rows * 6 * size * sizeof *c->sides);
+	if (!c->at || !c->layout.at || !c->sides)
 		return SSS_ERR_OUT_OF_MEMORY;
+	taps_point(&c->layout, c->layout.at, n);
 	for (int32_t t = 0; t <= n; t++)
 		c->at[t] = (float)(tap[t].offset / r);
 	c->lu0 = log(u_lo);
 	for (int32_t j = 0; j < rows; j++) {
 		double upp = exp(c->lu0 + j / CAP_STEPS);
 		for (int32_t t = 0; t <= n; t++) {
-			float *p = c->wa + ((size_t)j * (n + 1) + t) * PARAMS;
+			float *p = wa + (size_t)t * PARAMS;
 			tap_weights(k, tap[t].offset, tap[t].offset - tap[t].lo,
 			            tap[t].hi - tap[t].offset, upp, p, p + 3);
 		}
+		/* this row's weights, both sides, in the layout's order */
+		sss__taps row = c->layout;
+		for (int p = 0; p < 3; p++) {
+			row.w[p] = c->sides + ((size_t)j * 6 + p) * size;
+			row.a8[p] = c->sides + ((size_t)j * 6 + 3 + p) * size;
+		}
+		both_sides(n, c->at, wa, &row);
+		c->layout.count = row.count;
 	}
 	c->n = n;
 	c->rows = rows;
@@ -357,9 +373,11 @@ static sss_result cap_build(const sss__job *job, const sss__kernel *k,
 	return SSS_OK;
 }
 
-/* A cut pixel's tap weights into wa from its table, interpolated at upp
- * units per pixel; 0 if upp lies outside the table. */
-static int cap_weights(const struct capped *c, double upp, float *wa)
+/* Where a cut pixel's weights lie in its table: rows r0 and r0 + 6 count
+ * floats on, interpolated by f at upp units per pixel; 0 if upp lies
+ * outside the table. */
+static int cap_row(const struct capped *c, double upp, const float **r0,
+                   float *f)
 {
 	double x = (log(upp) - c->lu0) * CAP_STEPS;
 	if (!(x >= 0.0 && x <= c->rows - 1))
@@ -367,11 +385,8 @@ static int cap_weights(const struct capped *c, double upp, float *wa)
 	int32_t j = (int32_t)x;
 	if (j > c->rows - 2)
 		j = c->rows - 2;
-	float f = (float)(x - j);
-	size_t m = (size_t)(c->n + 1) * PARAMS;
-	const float *r0 = c->wa + (size_t)j * m, *r1 = r0 + m;
-	for (size_t i = 0; i < m; i++)
-		wa[i] = r0[i] + f * (r1[i] - r0[i]);
+	*f = (float)(x - j);
+	*r0 = c->sides + (size_t)j * 6 * c->layout.count;
 	return 1;
 }
 
@@ -380,7 +395,27 @@ typedef struct scratch {
 	sss__tap *tap;
 	float *at, *wa;
 	sss__taps taps;
+	sss__taps cut;  /* a cut kernel's: weights in taps' arrays, offsets
+	                   and cells its table's, interpolated between the
+	                   rows at cut_r0 by cut_f vector by vector as the
+	                   sums need them (cut_fill) */
+	const float *cut_r0;
+	float cut_f;
 } scratch;
+
+/* The cut taps' weights of vectors v0 .. v1 - 1. */
+static void cut_fill(scratch *sc, int32_t v0, int32_t v1)
+{
+	size_t size = (size_t)sc->cut.count;
+	const float *r0 = sc->cut_r0, *r1 = r0 + 6 * size;
+	float f = sc->cut_f;
+	for (int p = 0; p < 6; p++) {
+		float *o = p < 3 ? sc->cut.w[p] : sc->cut.a8[p - 3];
+		for (size_t i = (size_t)v0 * SSS__LANES; i < (size_t)v1 * SSS__LANES;
+		     i++)
+			o[i] = r0[p * size + i] + f * (r1[p * size + i] - r0[p * size + i]);
+	}
+}
 
 static void *scratch_new(scratch *sc, int32_t half)
 {
@@ -393,6 +428,7 @@ static void *scratch_new(scratch *sc, int32_t half)
 	sc->at = (float *)(void *)(sc->tap + taps);
 	sc->wa = sc->at + taps;
 	taps_point(&sc->taps, sc->wa + taps * PARAMS, half);
+	sc->cut = sc->taps;
 	return m;
 }
 
@@ -508,13 +544,15 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 	}
 	if (!capped && r >= t->half + 0.5)
 		return &t->sparse;
-	if (capped && t->cap[!ctx->first].r == r &&
-	    cap_weights(&t->cap[!ctx->first], ax->ortho ? 1.0 / ax->f : zc / ax->f,
-	                sc->wa)) {
-		/* A limit cut the kernel: its weights from the table. */
-		both_sides(t->cap[!ctx->first].n, t->cap[!ctx->first].at, sc->wa,
-		           &sc->taps);
-		return &sc->taps;
+	const struct capped *cut = &t->cap[!ctx->first];
+	if (capped && cut->r == r &&
+	    cap_row(cut, ax->ortho ? 1.0 / ax->f : zc / ax->f, &sc->cut_r0,
+	            &sc->cut_f)) {
+		/* a limit cut the kernel: its table's taps */
+		sc->cut.count = cut->layout.count;
+		sc->cut.at = cut->layout.at;
+		sc->cut.cell = cut->layout.cell;
+		return &sc->cut;
 	}
 	/* Weights for this pixel alone: the tap budget is too large to
 	 * tabulate, or the depth lies outside the table. */
@@ -533,8 +571,10 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 
 /* The sums of vectors v0 .. v1 - 1 of taps at b's pixel. */
 static void taps_sum(const pass_ctx *ctx, sss__blur1d *b, const sss__taps *t,
-                     int32_t v0, int32_t v1)
+                     int32_t v0, int32_t v1, scratch *sc)
 {
+	if (t == &sc->cut)
+		cut_fill(sc, v0, v1);
 	if (ctx->avx2)
 		sss__blur1d_taps_avx2(b, t, v0, v1);
 	else
@@ -565,7 +605,7 @@ static void anchor_at(const pass_ctx *ctx, const sss__blur1d *row,
 	                                 &b);
 	if (!far_is_wide(&b, t))
 		return;
-	taps_sum(ctx, &b, t, NEAR_VECTORS, t->count / SSS__LANES);
+	taps_sum(ctx, &b, t, NEAR_VECTORS, t->count / SSS__LANES, sc);
 	a->ok = 1;
 	a->slot = row->slot[pos];
 	a->capped = capped;
@@ -612,7 +652,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 		int32_t nv = t->count / SSS__LANES;
 		int32_t near = nv < NEAR_VECTORS ? nv : NEAR_VECTORS;
 		float acc[3], ws[3];
-		taps_sum(ctx, &b, t, 0, near);
+		taps_sum(ctx, &b, t, 0, near, sc);
 		for (int c = 0; c < 3; c++) {
 			acc[c] = b.acc[c];
 			ws[c] = b.wsum[c];
@@ -640,7 +680,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 				b.wsum[c] = anc[0].ws[c];
 			}
 		} else if (nv > near) {
-			taps_sum(ctx, &b, t, near, nv);
+			taps_sum(ctx, &b, t, near, nv, sc);
 			if (d == 0) { /* the next pixels' left anchor */
 				anchor *a = &anc[0];
 				a->pos = i;
