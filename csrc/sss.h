@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 10
+#define SSS_ABI_VERSION 11
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -395,6 +395,10 @@ SSS_API sss_result sss_material_field(int32_t i, sss_field_info *info);
  * NULL, its value; NULL past the end. */
 SSS_API const char *sss_material_field_name(int32_t i, int32_t j,
                                             int32_t *value);
+
+/* The scene description's name of profile kind `kind` (sss_profile_kind:
+ * "none", "burley", ...); NULL for any other value. */
+SSS_API const char *sss_profile_name(int32_t kind);
 
 /* Checks one material; detail about the first bad field goes to errbuf. */
 SSS_API sss_result sss_material_validate(const sss_material *mat,

@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 10  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 11  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -187,6 +187,7 @@ def _declare(lib):
         "sss_material_field_name": (c.c_char_p, [c.c_int32, c.c_int32,
                                                  c.POINTER(c.c_int32)]),
         "sss_method_summary": (c.c_char_p, [c.c_int32]),
+        "sss_profile_name": (c.c_char_p, [c.c_int32]),
         "sss_process_options_default": (None,
                                         [c.POINTER(ProcessOptions)]),
         "sss_exr_read": (c.c_int32, [c.c_char_p, c.c_void_p,
@@ -342,6 +343,16 @@ def material_fields():
             "lo": info.lo, "hi": info.hi, "lo_open": bool(info.lo_open),
             "names": names, "help": info.help.decode()}
         i += 1
+    return out
+
+
+def profiles():
+    """{name: kind} of the library's profiles (sss_profile_name: "burley"
+    -> SSS_PROFILE_BURLEY, ...), the kinds sss_field_info.profile holds."""
+    lib, out, kind = library(), {}, 0
+    while lib.sss_profile_name(kind):
+        out[lib.sss_profile_name(kind).decode()] = kind
+        kind += 1
     return out
 
 
