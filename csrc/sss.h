@@ -354,7 +354,6 @@ typedef struct sss_material {
 	 * The gain is 1 + strength (g - 1), so strength 0 stays the
 	 * identity. */
 	int32_t calibration;
-	float trial_gain; /* [0, 2] (1) */
 } sss_material;
 
 /* Sets struct_size, kind and that kind's defaults (d'Eon skin for

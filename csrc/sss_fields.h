@@ -149,9 +149,7 @@ X("transmission_baked_scale", transmission_baked_scale, F32, ALL, \
   "the radius scale the back light was baked at, 0 = not baked") \
 X("calibration", calibration, ENUM, ALL, ALWAYS, SSS_CALIBRATION_NONE, 0, \
   0, 0, 0, 0, SSS__NAMES(calibration), \
-  "the random walk whose energy is matched") \
-X("trial_gain", trial_gain, F32, ALL, ALWAYS, 1.0f, 0, 0, 0, 2, 0, \
-  SSS__NO_NAMES, "a trial factor")
+  "the random walk whose energy is matched")
 /* clang-format on */
 
 #endif

@@ -112,7 +112,6 @@ def draw_material_settings(layout, context, mat, split=True):
         col.label(text="Not scattered", icon='INFO')
         return
     col.prop(s, "strength", slider=True)
-    col.prop(s, "trial_gain")
     _prop(col, s, "radius_scale", split)
     if s.profile == 'BLENDER':
         _wrapped(col, context, "Radius and colour come from the material",
