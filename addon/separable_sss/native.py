@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 11  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 12  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -180,6 +180,10 @@ def _declare(lib):
                                                c.POINTER(c.c_double)]),
         "sss_transmission_slab": (c.c_int32, [c.c_void_p] +
                                   [c.POINTER(c.c_double)] * 3),
+        "sss_transmission_table": (c.c_int32, [c.c_void_p, c.c_int32,
+                                               c.POINTER(c.c_float),
+                                               c.POINTER(c.c_double),
+                                               c.POINTER(c.c_double)]),
         "sss_method_name": (c.c_char_p, [c.c_int32]),
         "sss_render_pass": (c.c_int32, [c.c_int32, c.POINTER(PassInfo)]),
         "sss_material_field": (c.c_int32, [c.c_int32,
@@ -453,6 +457,26 @@ def transmission_slab(material):
         if e.name == "SSS_ERR_UNSUPPORTED":
             return None
         raise
+
+
+def transmission_table(material, n):
+    """(step, span, table) of the slab behind a Burley profile's
+    transmission (sss_transmission_table): table, n x 3 floats (a flat
+    ctypes array), is T(t) / T(0) per channel at t_i = step (e^{i g} - 1),
+    g = ln(1 + span / step) / (n - 1), metres of the thickness pass at
+    radius scale 1. None when the material's transmission is not that
+    slab."""
+    table = (ctypes.c_float * (3 * n))()
+    step, span = ctypes.c_double(), ctypes.c_double()
+    try:
+        with _material(material) as row:
+            _check(library().sss_transmission_table(
+                row, n, table, ctypes.byref(step), ctypes.byref(span)), None)
+    except LibraryError as e:
+        if e.name == "SSS_ERR_UNSUPPORTED":
+            return None
+        raise
+    return step.value, span.value, table
 
 
 class Scene:
