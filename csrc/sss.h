@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 10
+#define SSS_ABI_VERSION 12
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -396,6 +396,10 @@ SSS_API sss_result sss_material_field(int32_t i, sss_field_info *info);
 SSS_API const char *sss_material_field_name(int32_t i, int32_t j,
                                             int32_t *value);
 
+/* The scene description's name of profile kind `kind` (sss_profile_kind:
+ * "none", "burley", ...); NULL for any other value. */
+SSS_API const char *sss_profile_name(int32_t kind);
+
 /* Checks one material; detail about the first bad field goes to errbuf. */
 SSS_API sss_result sss_material_validate(const sss_material *mat,
                                          char *errbuf, size_t errbuf_len);
@@ -454,6 +458,30 @@ SSS_API sss_result sss_transmission_reach(const sss_material *mat,
 SSS_API sss_result sss_transmission_slab(const sss_material *mat,
                                          double sigma_tr[3], double a[3],
                                          double zb[3]);
+
+/* The same slab's transmittance relative to a part of thickness 0,
+ * T(t) / T(0) per channel, sampled for a renderer that cannot call the
+ * library (the add-on's back-light layer looks it up in an image while
+ * it renders, then writes thickness 0, which the library turns into
+ * T(0)): table[3 i + c] is channel c at the thickness (of the thickness
+ * pass, in metres at radius_scale 1, the material's thickness_scale
+ * applied as sss_transmittance applies it)
+ *
+ *   t_i = step (e^{i g} - 1),  g = ln(1 + span / step) / (n - 1),
+ *
+ * i = 0 .. n - 1: evenly spaced (step apart, a quarter of the smallest
+ * mean free path) near 0, evenly in ln t far away, t_0 = 0 and
+ * t_{n-1} = span, where every channel has fallen below 1e-6 of T(0). A
+ * lookup reads index ln(1 + t / step) / g. The last sample is 0: a
+ * lookup that interpolates linearly between samples and holds the last
+ * one beyond them lets nothing through where the library lets (nearly)
+ * nothing through. A channel without a medium (radius 0) is 1 at i = 0
+ * and 0 after, as sss_transmittance; with thickness_scale 0 every sample
+ * is 1 (thickness plays no part). n >= 2; SSS_ERR_UNSUPPORTED when the
+ * material's transmission is not that slab. */
+SSS_API sss_result sss_transmission_table(const sss_material *mat,
+                                          int32_t n, float *table,
+                                          double *step, double *span);
 
 /* The energy gain of a calibration for a diffuse colour (albedo, clamped
  * to [0, 1]; a non-finite channel gets 1) seen at view_cosine, |cos| of

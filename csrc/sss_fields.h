@@ -19,12 +19,17 @@
  *   names    ENUM: SSS__NAMES(its table of names, below), else
  *            SSS__NO_NAMES (two arguments once expanded: an X that
  *            reads them goes through a second macro)
- *   help     one line: what it is, for documentation and tooltips
+ *   help     one line: what it is, for documentation and tooltips; a
+ *            length starts with its unit, "metres" or "mm" (the add-on
+ *            shows the first in the scene's units, the second in its
+ *            label)
  *
  * sss_material.c makes the defaults, the checks and sss_material_field()
- * from it, sss_scene.c the JSON reader's material keys, and
- * tests/test_scene.c checks docs/scene.md against it. A new field is one
- * line here plus the code that uses it. */
+ * from it, sss_scene.c the JSON reader's material keys, the add-on its
+ * material settings and their scene-description keys (properties.py,
+ * description.py), and tests/test_scene.c checks docs/scene.md against
+ * it. A new field is one line here plus the code that uses it (and, if
+ * artists set it, its line in the add-on's panel, ui.py). */
 #ifndef SSS_FIELDS_H
 #define SSS_FIELDS_H
 

@@ -109,6 +109,14 @@ const char *sss_material_field_name(int32_t i, int32_t j, int32_t *value)
 	return fields[i].names[j].name;
 }
 
+const char *sss_profile_name(int32_t kind)
+{
+	for (int i = 0; i < SSS__COUNT(sss__profile_names); i++)
+		if (sss__profile_names[i].value == kind)
+			return sss__profile_names[i].name;
+	return NULL;
+}
+
 
 /* Compared as floats, as the field holds them: 1e30 read into a float
  * is 1.0000000150e30, which is still "at most 1e30". */

@@ -320,10 +320,10 @@ sss_result sss_transmittance(const sss_material *mat, double thickness,
 }
 
 /* The thickness where the slab lets less than `level` through: at most
- * 100 mean free paths (without absorption it falls only as a / L). */
-static double slab_reach(const tmat *m, int c, double level)
+ * `mfps` mean free paths (without absorption it falls only as a / L). */
+static double slab_reach(const tmat *m, int c, double level, double mfps)
 {
-	double hi = 100.0 * m->mfp[c];
+	double hi = mfps * m->mfp[c];
 	if (slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], hi) >= level)
 		return hi;
 	double lo = 0.0;
@@ -352,7 +352,7 @@ sss_result sss_transmission_reach(const sss_material *mat, double *metres)
 			return sss_material_support(&v, metres);
 		for (int c = 0; c < 3; c++)
 			if (m.n[c] == 0 && m.d[c] > 0.0) {
-				double s = slab_reach(&m, c, 0.01);
+				double s = slab_reach(&m, c, 0.01, 100.0);
 				reach = s > reach ? s : reach;
 			}
 		break;
@@ -398,6 +398,59 @@ sss_result sss_transmission_slab(const sss_material *mat, double sigma_tr[3],
 		sigma_tr[c] = slab ? m.sigma_tr[c] : 0.0;
 		a[c] = slab ? m.a[c] : 0.0;
 		zb[c] = slab ? m.zb[c] : 0.0;
+	}
+	return SSS_OK;
+}
+
+/* sss_transmission_table: where its samples end, relative to T(0), and
+ * in mean free paths at most; the evenly spaced samples' spacing near 0,
+ * in mean free paths. */
+#define TABLE_FLOOR 1e-6
+#define TABLE_MFPS 1e6
+#define TABLE_STEP_MFPS 0.25
+
+sss_result sss_transmission_table(const sss_material *mat, int32_t n,
+                                  float *table, double *step, double *span)
+{
+	sss_material v;
+	tmat m;
+	sss_result r = table && step && span && n >= 2
+	               ? tmat_in_metres(mat, &v, &m) : SSS_ERR_INVALID_ARGUMENT;
+	if (r)
+		return r;
+	if (m.model != SSS_TRANSMISSION_BURLEY || v.kind != SSS_PROFILE_BURLEY)
+		return SSS_ERR_UNSUPPORTED;
+	int medium[3];
+	double T0[3], end = 0.0, l = INFINITY;
+	for (int c = 0; c < 3; c++) {
+		medium[c] = m.n[c] == 0 && m.d[c] > 0.0;
+		if (!medium[c])
+			continue;
+		T0[c] = slab_eval(m.sigma_tr[c], m.a[c], m.zb[c], 0.0);
+		double e = slab_reach(&m, c, TABLE_FLOOR * T0[c], TABLE_MFPS);
+		end = e > end ? e : end;
+		l = m.mfp[c] < l ? m.mfp[c] : l;
+	}
+	/* Slab thicknesses; the table's are the pass's. With no medium at all
+	 * any lengths do: 1 mm. */
+	double k = m.thickness_scale;
+	if (!(end > 0.0))
+		end = l = 1e-3;
+	double per = k > 0.0 ? 1.0 / k : 1.0;
+	*step = TABLE_STEP_MFPS * l * per;
+	*span = end * per;
+	double g = log1p(*span / *step) / (n - 1);
+	for (int32_t i = 0; i < n; i++) {
+		double t = k == 0.0 ? 0.0
+		         : i == n - 1 ? end : expm1(g * (double)i) * *step * k;
+		for (int c = 0; c < 3; c++) {
+			double T = !medium[c] ? (t == 0.0 ? 1.0 : 0.0)
+			         : slab_eval(m.sigma_tr[c], m.a[c], m.zb[c], t) /
+			           T0[c];
+			if (i == n - 1 && k != 0.0)
+				T = 0.0; /* nothing beyond the table */
+			table[3 * (size_t)i + (size_t)c] = (float)(T < 1.0 ? T : 1.0);
+		}
 	}
 	return SSS_OK;
 }

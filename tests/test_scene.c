@@ -225,6 +225,9 @@ static void test_defaults(void)
 		snprintf(name, sizeof name, "material %d", (int)k + 3);
 		CHECK("def-kind-name", sc && strcmp(sss_scene_material_name(sc, 0),
 		                                    name) == 0, "default name");
+		CHECK("def-kind-profile-name", sss_profile_name(kinds[k].kind) &&
+		      strcmp(sss_profile_name(kinds[k].kind), kinds[k].name) == 0,
+		      "sss_profile_name(%d)", (int)kinds[k].kind);
 		CHECK("def-kind-warn", strcmp(warn, "warning: unknown key "
 		                              "'materials_note' (ignored)") == 0,
 		      "warn '%s'", warn);
@@ -902,6 +905,8 @@ static void test_doc_table(void)
 	             sss_material_field(0, NULL));
 	CHECK("field-name-past-end", !sss_material_field_name(0, 99, NULL),
 	      "a name past the end");
+	CHECK("profile-name-past-end", !sss_profile_name(5) &&
+	      !sss_profile_name(-1), "a profile past the end");
 }
 
 int main(void)

@@ -849,10 +849,113 @@ static void test_reach_and_slab(void)
 	             sss_transmission_slab(&m, s, a, zb));
 }
 
+/* The slab's table (sss_transmission_table): its samples are
+ * sss_transmittance over its value at 0, and a linear lookup that holds
+ * the last sample beyond the table follows the library, micrometre and
+ * nanometre radii included, and lets nothing through where it lets
+ * nothing through. */
+static void test_table(void)
+{
+	enum { N = 4096 };
+	static float table[3 * N];
+	static const float radii[] = {0.03f, 0.00367f, 1e-6f, 1e-9f};
+	static const float scales[] = {1.0f, 0.4f};
+	char id[64];
+	for (int ri = 0; ri < 4; ri++)
+		for (int si = 0; si < 2; si++) {
+			sss_material m = skin(SSS_TRANSMISSION_BURLEY, radii[ri]);
+			m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+			m.albedo[0] = 0.95f; /* red: a long reach */
+			m.thickness_scale = scales[si];
+			double step = -1.0, span = -1.0;
+			snprintf(id, sizeof id, "table.%g.%g", radii[ri], scales[si]);
+			CHECK_STATUS(id, SSS_OK, sss_transmission_table(&m, N, table,
+			                                                &step, &span));
+			double g = log1p(span / step) / (N - 1);
+			double T0[3], worst = 0.0, worst_lookup = 0.0;
+			int leaks = 0, rising = 0;
+			sss_transmittance(&m, 0.0, 1.0, T0);
+			for (int i = 0; i < N; i++)
+				for (int c = 0; c < 3; c++) {
+					double T[3];
+					sss_transmittance(&m, i == N - 1 ? span
+					                  : expm1(g * i) * step, 1.0, T);
+					double want = i == N - 1 ? 0.0 : T[c] / T0[c];
+					worst = fmax(worst, fabs(table[3 * i + c] - want));
+					if (i && table[3 * i + c] > table[3 * (i - 1) + c])
+						rising++;
+				}
+			/* Between and beyond the samples, as the add-on's image
+			 * lookup reads them. */
+			double gj = log1p(1.5 * span / step) / 20000.0;
+			for (int j = 0; j <= 20000; j++) {
+				double t = step * expm1(gj * j);
+				double x = log1p(t / step) / g;
+				int i = x >= N - 1 ? N - 2 : (int)x;
+				double f = x >= N - 1 ? 1.0 : x - i, T[3];
+				sss_transmittance(&m, t, 1.0, T);
+				for (int c = 0; c < 3; c++) {
+					double got = (1.0 - f) * table[3 * i + c] +
+					             f * table[3 * (i + 1) + c];
+					double want = T[c] / T0[c];
+					worst_lookup = fmax(worst_lookup, fabs(got - want));
+					leaks += want == 0.0 && got != 0.0;
+				}
+			}
+			snprintf(id, sizeof id, "table.%g.%g.samples", radii[ri],
+			         scales[si]);
+			CHECK(id, step > 0.0 && span > step && worst < 1e-6,
+			      "step %g, span %g, off by %g", step, span, worst);
+			snprintf(id, sizeof id, "table.%g.%g.lookup", radii[ri],
+			         scales[si]);
+			CHECK(id, worst_lookup < 5e-4, "off by %g", worst_lookup);
+			snprintf(id, sizeof id, "table.%g.%g.no-leak", radii[ri],
+			         scales[si]);
+			CHECK(id, leaks == 0 && rising == 0, "%d leaks, %d rising",
+			      leaks, rising);
+			/* The table ends where (almost) nothing crosses: its span is
+			 * the pass thickness, the slab's divided by the scale. */
+			double T[3];
+			sss_transmittance(&m, span, 1.0, T);
+			snprintf(id, sizeof id, "table.%g.%g.end", radii[ri],
+			         scales[si]);
+			CHECK(id, T[0] <= 1.01e-6 * T0[0] && T[1] <= 1.01e-6 * T0[1] &&
+			      T[2] <= 1.01e-6 * T0[2], "T(end) %g %g %g", T[0], T[1],
+			      T[2]);
+		}
+	/* A micrometre radius: under a millimetre of skin nothing crosses,
+	 * in the library and in its table. */
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 1e-6f);
+	double step, span, T[3];
+	sss_transmission_table(&m, N, table, &step, &span);
+	sss_transmittance(&m, 1e-3, 1.0, T);
+	CHECK("table.micrometre", span < 1e-3 && T[0] == 0.0 && T[1] == 0.0 &&
+	      T[2] == 0.0, "span %g, T(1 mm) %g", span, T[0]);
+	m.thickness_scale = 0.0f;
+	sss_transmission_table(&m, N, table, &step, &span);
+	int ones = 0;
+	for (int i = 0; i < 3 * N; i++)
+		ones += table[i] == 1.0f;
+	CHECK("table.thickness-scale-0", ones == 3 * N, "%d ones", ones);
+	m.thickness_scale = 1.0f;
+	m.radius[2] = 0.0f;
+	sss_transmission_table(&m, N, table, &step, &span);
+	CHECK("table.no-medium", table[2] == 1.0f && table[5] == 0.0f &&
+	      table[3 * (N - 1) + 2] == 0.0f, "%g %g", table[2], table[5]);
+	CHECK_STATUS("table.n", SSS_ERR_INVALID_ARGUMENT,
+	             sss_transmission_table(&m, 1, table, &step, &span));
+	CHECK_STATUS("table.null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_transmission_table(&m, N, NULL, &step, &span));
+	m.transmission = SSS_TRANSMISSION_BEER_LAMBERT;
+	CHECK_STATUS("table.not-the-slab", SSS_ERR_UNSUPPORTED,
+	             sss_transmission_table(&m, N, table, &step, &span));
+}
+
 int main(void)
 {
 	test_slab();
 	test_reach_and_slab();
+	test_table();
 	test_models();
 	test_extremes();
 	test_validation();

@@ -17,88 +17,110 @@ def method_name(identifier):
     return identifier.lower().replace("_", "-")
 
 
-MODELS = {"OFF": "off", "BURLEY": "burley", "JIMENEZ": "jimenez",
-          "BEER_LAMBERT": "beer-lambert", "FAST": "fast"}
+# The material schema's fields (native.material_fields(), the library's
+# table) become the entry's keys through these rules; a new field needs
+# none of its own.
+
+# The fields the add-on works out itself instead of offering them as
+# settings: the calibration follows Match Energy, the baked scale the
+# back-light layer (_with_baked).
+DERIVED = ("transmission_baked_scale", "calibration")
+
+# The setting a field is stored as where it is not the field's member
+# (the name .blend files and presets already hold).
+PROPERTY_NAMES = {"burley_mapping": "mapping"}
+
+# The fields the material's Radius Scale multiplies: its lengths and the
+# profiles' own scale factors.
+SCALED = ("radius", "gaussian_scale", "jimenez_width", "scatter_scale",
+          "transmission_distance")
 
 
-def _transmission_fields(found):
-    """The scene-description keys of a material's transmission."""
-    s = found.material.sss
-    kind = lighting.model(found)
-    if kind == "OFF":
-        return {"transmission": "off"}
-    return {
-        "transmission": MODELS[kind],
-        "transmission_strength": s.transmission_strength,
-        "transmission_color": [min(max(float(c), 0.0), 1.0)
-                               for c in s.transmission_color],
-        "transmission_distance": s.transmission_distance * s.radius_scale,
-        "transmission_translucency": s.transmission_translucency,
-        "transmission_distortion": s.transmission_distortion,
-        "transmission_power": s.transmission_power,
-        "transmission_scale": s.transmission_scale,
-        "transmission_ambient": s.transmission_ambient,
-        "thickness_scale": s.thickness_scale,
-    }
+def property_name(member):
+    """The material setting (Material.sss) that holds a field."""
+    return PROPERTY_NAMES.get(member, member)
 
 
-# The Radius Meaning choices (properties.MAPPINGS) by their scene.json names.
-MAPPING_NAMES = {"CYCLES": "cycles", "EEVEE": "eevee",
-                 "RANDOM_WALK": "random-walk",
-                 "CYCLES_RANDOM_WALK": "cycles-random-walk",
-                 "CYCLES4_RANDOM_WALK": "cycles4-random-walk"}
+def identifier(name):
+    """A library name as a setting's choice ("pre-and-post" ->
+    "PRE_AND_POST"); library_name() is its inverse."""
+    return name.upper().replace("-", "_")
+
+
+def library_name(choice):
+    return choice.lower().replace("_", "-")
+
+
+def _setting(s, member, field):
+    """One field's value as the material's setting holds it, in the
+    library's terms (an enum by its name), within the field's range where
+    it has an upper bound."""
+    value = getattr(s, property_name(member))
+    if field["type"] == "enum":
+        return library_name(value)
+    if field["type"] == "int":
+        return int(value)
+    values = [float(v) for v in value] if field["type"] == "rgb" \
+        else [float(value)]
+    if field["hi"] < 1e30 and not field["lo_open"]:
+        values = [min(max(v, field["lo"]), field["hi"]) for v in values]
+    return values if field["type"] == "rgb" else values[0]
 
 
 def material_entry(found):
-    """One entry of the description's material table."""
+    """One entry of the description's material table: every field of the
+    library's schema that the material's profile reads (transmission's
+    only while it transmits), from its setting, then what the add-on
+    resolves (Auto choices, From Material, radius scale, weight)."""
     s = found.material.sss
+    profile = "burley" if s.profile == "BLENDER" else library_name(s.profile)
+    kind = native.profiles()[profile]
+    model = lighting.model(found)
+    fields = native.material_fields()
+    entry = {"pass_index": found.pass_index, "name": found.name,
+             "profile": profile}
+    for member, field in fields.items():
+        if member in DERIVED or field["profile"] not in (-1, kind) or \
+                (field["transmits"] and model == "OFF"):
+            continue
+        entry[field["key"]] = _setting(s, member, field)
     # Principled v2's Subsurface Weight mixes the diffuse and subsurface
     # lobes: it scales how much of the light is scattered.
-    entry = {"pass_index": found.pass_index, "name": found.name,
-             "strength": s.strength * found.weight,
-             "texturing": "post" if s.texturing == "POST" else
-             "pre-and-post"}
-    if s.taps:
-        entry["taps"] = s.taps
+    entry["strength"] *= found.weight
+    entry["transmission"] = library_name(model)
+    if not entry["taps"]:
+        del entry["taps"]          # the profile's own (the scene's; 17)
     scale = s.radius_scale
-    if s.profile in ("BLENDER", "BURLEY"):
-        # Measured (blender_scripts/calibrate.py, csrc/sss_calibration.c):
-        # how Cycles' random walk widens with the colour and what energy it
-        # returns, per method and Blender version. The Burley profile
-        # follows Random Walk (Skin), the walk 3.x has.
-        walk = compat.WALK_CALIBRATION.get(
-            "RANDOM_WALK_SKIN" if s.profile == "BURLEY" else found.method)
-        if s.mapping != "AUTO":
-            mapping = MAPPING_NAMES[s.mapping]
-        elif walk:
-            mapping = walk[0]
-        else:
-            mapping = "random-walk" if found.method.startswith(
-                "RANDOM_WALK") else "cycles"
-        radius = found.radius if s.profile == "BLENDER" else tuple(s.radius)
-        albedo = (found.albedo or found.color) if s.profile == "BLENDER" \
-            else tuple(s.albedo)
-        entry.update(profile="burley",
-                     radius=[float(r) * scale for r in radius],
-                     mapping=mapping,
-                     albedo=[min(max(float(a), 0.0), 1.0) for a in albedo])
-        if s.match_energy and walk:
-            entry["calibration"] = walk[1]
-    elif s.profile == "GAUSSIANS":
-        entry.update(profile="gaussians", scale=s.gaussian_scale * scale)
-    elif s.profile == "JIMENEZ":
-        entry.update(profile="jimenez", width=s.jimenez_width * scale,
-                     strength_rgb=list(s.jimenez_strength),
-                     falloff=list(s.jimenez_falloff))
-    elif s.profile == "NEAR_FAR":
-        entry.update(profile="near-far",
-                     scatter_scale=s.scatter_scale * scale,
-                     balance=s.near_far_balance,
-                     near_sigma=list(s.near_sigma),
-                     far_sigma=list(s.far_sigma))
-    if s.profile != "NONE":
-        entry.update(_transmission_fields(found))
+    for member in SCALED:
+        key = fields[member]["key"]
+        if key in entry:
+            entry[key] = [v * scale for v in entry[key]] if isinstance(
+                entry[key], list) else entry[key] * scale
+    if profile == "burley":
+        _burley(found, entry, fields)
     return entry
+
+
+def _burley(found, entry, fields):
+    """The Burley fields the add-on resolves: From Material's radius and
+    colour, the Auto radius meaning and the energy calibration.
+    Measured (blender_scripts/calibrate.py, csrc/sss_calibration.c): how
+    Cycles' random walk widens with the colour and what energy it
+    returns, per method and Blender version. The Burley profile follows
+    Random Walk (Skin), the walk 3.x has."""
+    s = found.material.sss
+    walk = compat.WALK_CALIBRATION.get(
+        "RANDOM_WALK_SKIN" if s.profile == "BURLEY" else found.method)
+    if s.mapping == "AUTO":
+        entry["mapping"] = walk[0] if walk else "random-walk" if \
+            found.method.startswith("RANDOM_WALK") else "cycles"
+    if s.profile == "BLENDER":
+        entry["radius"] = [float(r) * s.radius_scale for r in found.radius]
+        albedo = fields["albedo"]
+        entry["albedo"] = [min(max(float(a), albedo["lo"]), albedo["hi"])
+                           for a in (found.albedo or found.color)]
+    if s.match_energy and walk:
+        entry["calibration"] = walk[1]
 
 
 def camera_entry(scene):

@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 10  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 12  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -180,6 +180,10 @@ def _declare(lib):
                                                c.POINTER(c.c_double)]),
         "sss_transmission_slab": (c.c_int32, [c.c_void_p] +
                                   [c.POINTER(c.c_double)] * 3),
+        "sss_transmission_table": (c.c_int32, [c.c_void_p, c.c_int32,
+                                               c.POINTER(c.c_float),
+                                               c.POINTER(c.c_double),
+                                               c.POINTER(c.c_double)]),
         "sss_method_name": (c.c_char_p, [c.c_int32]),
         "sss_render_pass": (c.c_int32, [c.c_int32, c.POINTER(PassInfo)]),
         "sss_material_field": (c.c_int32, [c.c_int32,
@@ -187,6 +191,7 @@ def _declare(lib):
         "sss_material_field_name": (c.c_char_p, [c.c_int32, c.c_int32,
                                                  c.POINTER(c.c_int32)]),
         "sss_method_summary": (c.c_char_p, [c.c_int32]),
+        "sss_profile_name": (c.c_char_p, [c.c_int32]),
         "sss_process_options_default": (None,
                                         [c.POINTER(ProcessOptions)]),
         "sss_exr_read": (c.c_int32, [c.c_char_p, c.c_void_p,
@@ -345,6 +350,16 @@ def material_fields():
     return out
 
 
+def profiles():
+    """{name: kind} of the library's profiles (sss_profile_name: "burley"
+    -> SSS_PROFILE_BURLEY, ...), the kinds sss_field_info.profile holds."""
+    lib, out, kind = library(), {}, 0
+    while lib.sss_profile_name(kind):
+        out[lib.sss_profile_name(kind).decode()] = kind
+        kind += 1
+    return out
+
+
 @contextlib.contextmanager
 def _material(material):
     """The library's row (a pointer to sss_material) for one material of a
@@ -442,6 +457,26 @@ def transmission_slab(material):
         if e.name == "SSS_ERR_UNSUPPORTED":
             return None
         raise
+
+
+def transmission_table(material, n):
+    """(step, span, table) of the slab behind a Burley profile's
+    transmission (sss_transmission_table): table, n x 3 floats (a flat
+    ctypes array), is T(t) / T(0) per channel at t_i = step (e^{i g} - 1),
+    g = ln(1 + span / step) / (n - 1), metres of the thickness pass at
+    radius scale 1. None when the material's transmission is not that
+    slab."""
+    table = (ctypes.c_float * (3 * n))()
+    step, span = ctypes.c_double(), ctypes.c_double()
+    try:
+        with _material(material) as row:
+            _check(library().sss_transmission_table(
+                row, n, table, ctypes.byref(step), ctypes.byref(span)), None)
+    except LibraryError as e:
+        if e.name == "SSS_ERR_UNSUPPORTED":
+            return None
+        raise
+    return step.value, span.value, table
 
 
 class Scene:

@@ -88,9 +88,9 @@ class SSS_OT_material_preset_add(AddPresetBase, bpy.types.Operator):
     preset_menu = "SSS_MT_material_presets"
     preset_subdir = PRESET_SUBDIR
     preset_defines = [MATERIAL_DEFINE]
-    # Every setting but the PropertyGroup's own name.
-    preset_values = ["material.sss." + key for key in
-                     SSSMaterialSettings.__annotations__]
+    # Every setting but the PropertyGroup's own name (register() fills
+    # it once the schema's fields are added).
+    preset_values = []
 
     @classmethod
     def poll(cls, context):
@@ -106,6 +106,8 @@ classes = (SSS_MT_material_presets, SSS_OT_material_preset_add)
 
 def register():
     global _fallback
+    SSS_OT_material_preset_add.preset_values = [
+        "material.sss." + key for key in SSSMaterialSettings.__annotations__]
     for cls in classes:
         bpy.utils.register_class(cls)
     try:

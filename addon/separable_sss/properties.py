@@ -1,12 +1,16 @@
 """Settings stored in the .blend: per material (Material.sss) and per scene
-(Scene.sss). Units follow the library: metres for radii and widths, mm for
-Gaussian sigmas."""
+(Scene.sss). The material's are the add-on's own few (profile, radius scale,
+energy matching) plus one per field of the library's material schema
+(sss_material_field), made from it when the add-on is enabled: its default,
+range, help and unit (metres for radii and widths, mm for Gaussian
+sigmas)."""
 import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty,
                        StringProperty)
 
 from . import live, native
+from .description import DERIVED, identifier, property_name
 
 PROFILES = [
     ("BLENDER", "From Material",
@@ -20,31 +24,6 @@ PROFILES = [
     ("NEAR_FAR", "Near/Far Gaussians",
      "Two Gaussians: a tight near and a wide far one", 4),
     ("NONE", "Off", "Do not scatter this material", 5),
-]
-
-MAPPINGS = [
-    ("AUTO", "Auto", "What this Blender's Cycles does with the radius for "
-     "Random Walk materials (and the Burley profile), Cycles' Burley "
-     "otherwise", 0),
-    ("CYCLES", "Cycles Burley", "d = radius / 4 pi", 1),
-    ("EEVEE", "EEVEE", "d = 0.0459 radius", 2),
-    ("RANDOM_WALK", "Mean Free Path",
-     "The radius is the diffuse mean free path (Christensen-Burley)", 3),
-    ("CYCLES_RANDOM_WALK", "Cycles Random Walk",
-     "What Cycles' random walk (3.x's Random Walk, 4.x's Random Walk "
-     "(Skin)) does with the radius, as measured on slabs: its mean free "
-     "path through Jensen's dipole, then Burley's fit", 4),
-    ("CYCLES4_RANDOM_WALK", "Cycles 4 Random Walk",
-     "What the Random Walk of Cycles 4.x and 5.x does with the radius, as "
-     "measured on slabs (narrower for dark colours)", 5),
-]
-
-TEXTURING = [
-    ("POST", "Post-Scatter",
-     "Blur the light, multiply by the colour after: crisp texture", 0),
-    ("PRE_AND_POST", "Pre- and Post-Scatter",
-     "Square root of the colour before and after: texture bleeds a little",
-     1),
 ]
 
 # The Method choices come from the library, which names its methods; the
@@ -68,22 +47,6 @@ def method_items(_self=None, _context=None):
     return _method_items
 
 
-TRANSMISSION = [
-    ("AUTO", "Auto", "Profile for Random Walk materials (measured "
-     "against Cycles' random walk), off for the others", 5),
-    ("OFF", "Off", "No light through thin parts from behind", 0),
-    ("BURLEY", "Profile", "Burley profiles: the share of the light "
-     "entering the back that leaves by the front, from diffusion in the "
-     "random walk's own medium (per sample, along the real paths); "
-     "Gaussian sums: their mass beyond the thickness", 1),
-    ("JIMENEZ", "Jimenez", "Jimenez et al. 2010: d'Eon's skin Gaussians "
-     "through s = t 8.25 (1 - translucency) / width", 2),
-    ("BEER_LAMBERT", "Beer-Lambert", "The colour seen through the given "
-     "distance: colour ^ (thickness / distance)", 3),
-    ("FAST", "Fast (GDC 2011)", "pow(N.V (1 - distortion), power) x scale "
-     "+ ambient, fading out at the distance: an artist model", 4),
-]
-
 BACKLIGHT_LAYER = [
     ("AUTO", "Auto", "Render the back-light layer when a transmitting "
      "material is lit from behind (a light past 75 degrees from the "
@@ -94,15 +57,9 @@ BACKLIGHT_LAYER = [
 
 
 class SSSMaterialSettings(bpy.types.PropertyGroup):
+    """The add-on's own settings; register() adds one property per field
+    of the library's material schema (field_properties)."""
     profile: EnumProperty(name="Profile", items=PROFILES, default="BLENDER")
-    strength: FloatProperty(
-        name="Strength", min=0.0, max=1.0, default=1.0,
-        description="Share of the diffuse light that scatters")
-    texturing: EnumProperty(name="Texturing", items=TEXTURING,
-                            default="POST")
-    mapping: EnumProperty(
-        name="Radius Meaning", items=MAPPINGS, default="AUTO",
-        description="How a Burley radius becomes the profile's shape")
     radius_scale: FloatProperty(
         name="Radius Scale", min=0.0, soft_max=10.0, default=1.0,
         description="Multiplies this material's scattering distances (the "
@@ -113,74 +70,137 @@ class SSSMaterialSettings(bpy.types.PropertyGroup):
         "random walk's measured reflectance over the diffuse lobe's, for "
         "the colour, the angle each pixel is seen at and how curved the "
         "surface is there (Random Walk materials and the Burley profile)")
-    radius: FloatVectorProperty(
-        name="Radius", size=3, min=0.0, soft_max=0.1, precision=5,
-        subtype="NONE", unit="LENGTH",
-        default=(0.00367, 0.00137, 0.00068),
-        description="Scattering distance per channel (Burley profile)")
-    albedo: FloatVectorProperty(
-        name="Albedo", size=3, min=0.0, max=1.0, subtype="COLOR",
-        default=(0.8, 0.8, 0.8),
-        description="Surface albedo, for the mean-free-path meaning")
-    gaussian_scale: FloatProperty(
-        name="Scale", min=0.0, soft_max=20.0, default=1.0,
-        description="Multiplies the skin Gaussians' widths")
-    jimenez_width: FloatProperty(
-        name="Width", min=0.0, soft_max=0.1, default=0.012, precision=4,
-        subtype="DISTANCE", unit="LENGTH",
-        description="World span of the kernel (three kernel units)")
-    jimenez_strength: FloatVectorProperty(
-        name="Strength", size=3, min=0.0, max=1.0, subtype="COLOR",
-        default=(0.48, 0.41, 0.28))
-    jimenez_falloff: FloatVectorProperty(
-        name="Falloff", size=3, min=0.001, max=10.0, subtype="COLOR",
-        default=(1.0, 0.37, 0.3))
-    scatter_scale: FloatProperty(name="Scatter Scale", min=0.0,
-                                 soft_max=10.0, default=1.0)
-    near_far_balance: FloatProperty(
-        name="Near/Far Balance", min=0.0, max=1.0, default=0.5,
-        description="1: all near (tight), 0: all far (wide)")
-    near_sigma: FloatVectorProperty(name="Near Sigma (mm)", size=3,
-                                    min=0.001, soft_max=10.0,
-                                    default=(0.35, 0.07, 0.035))
-    far_sigma: FloatVectorProperty(name="Far Sigma (mm)", size=3,
-                                   min=0.001, soft_max=20.0,
-                                   default=(1.0, 0.12, 0.10))
-    taps: IntProperty(
-        name="Taps", min=0, max=4097, default=0,
-        description="Samples per 1-D pass for this material; 0: the "
-        "scene's Taps")
-    transmission: EnumProperty(
-        name="Transmission", items=TRANSMISSION, default="AUTO",
-        description="Light through thin parts lit from behind (ears, "
-        "fingers, jade, wax, leaves)")
-    transmission_strength: FloatProperty(
-        name="Strength", min=0.0, max=1.0, default=1.0,
-        description="Share of the back light that crosses")
-    transmission_color: FloatVectorProperty(
-        name="Tint", size=3, min=0.0, max=1.0, subtype="COLOR",
-        default=(1.0, 1.0, 1.0),
-        description="Tint; Beer-Lambert: the colour seen through Distance")
-    transmission_distance: FloatProperty(
-        name="Distance", min=1e-6, soft_max=0.1, default=0.01, precision=4,
-        subtype="DISTANCE", unit="LENGTH",
-        description="Beer-Lambert: where the colour is measured; Fast: "
-        "the thickness where it fades out")
-    transmission_translucency: FloatProperty(
-        name="Translucency", min=0.0, max=1.0, default=0.83,
-        description="Jimenez: 1 lets everything through")
-    transmission_distortion: FloatProperty(
-        name="Distortion", min=0.0, max=1.0, default=0.2,
-        description="Fast: normal shift of the light vector")
-    transmission_power: FloatProperty(name="Power", min=0.01,
-                                      soft_max=32.0, default=4.0)
-    transmission_scale: FloatProperty(name="Scale", min=0.0, soft_max=10.0,
-                                      default=1.0)
-    transmission_ambient: FloatProperty(name="Ambient", min=0.0,
-                                        soft_max=1.0, default=0.0)
-    thickness_scale: FloatProperty(
-        name="Thickness", min=0.0, soft_max=10.0, default=1.0,
-        description="Multiplies the measured thickness (below 1: thinner)")
+
+
+# Enum fields: the choices the add-on adds before the library's (resolved by
+# description.py and lighting.py; the first is the default) and what is
+# added to a library value to give the value stored in .blend files.
+ENUM_EXTRAS = {
+    "burley_mapping": (1, [
+        ("AUTO", "Auto", "What this Blender's Cycles does with the radius "
+         "for Random Walk materials (and the Burley profile), Cycles' "
+         "Burley otherwise", 0)]),
+    "transmission": (0, [
+        ("AUTO", "Auto", "Profile for Random Walk materials (measured "
+         "against Cycles' random walk), off for the others", 5)]),
+}
+
+# Labels and tooltips of the library's enum names where the name alone
+# says too little; any other name is shown title-cased with the field's
+# help.
+ENUM_TEXT = {
+    ("burley_mapping", "cycles"): ("Cycles Burley", "d = radius / 4 pi"),
+    ("burley_mapping", "eevee"): ("EEVEE", "d = 0.0459 radius"),
+    ("burley_mapping", "random-walk"): (
+        "Mean Free Path",
+        "The radius is the diffuse mean free path (Christensen-Burley)"),
+    ("burley_mapping", "cycles-random-walk"): (
+        "Cycles Random Walk",
+        "What Cycles' random walk (3.x's Random Walk, 4.x's Random Walk "
+        "(Skin)) does with the radius, as measured on slabs: its mean free "
+        "path through Jensen's dipole, then Burley's fit"),
+    ("burley_mapping", "cycles4-random-walk"): (
+        "Cycles 4 Random Walk",
+        "What the Random Walk of Cycles 4.x and 5.x does with the radius, "
+        "as measured on slabs (narrower for dark colours)"),
+    ("texturing", "post"): (
+        "Post-Scatter",
+        "Blur the light, multiply by the colour after: crisp texture"),
+    ("texturing", "pre-and-post"): (
+        "Pre- and Post-Scatter",
+        "Square root of the colour before and after: texture bleeds a "
+        "little"),
+    ("transmission", "off"): ("Off",
+                              "No light through thin parts from behind"),
+    ("transmission", "burley"): (
+        "Profile", "Burley profiles: the share of the light entering the "
+        "back that leaves by the front, from diffusion in the random "
+        "walk's own medium (per sample, along the real paths); Gaussian "
+        "sums: their mass beyond the thickness"),
+    ("transmission", "jimenez"): (
+        "Jimenez", "Jimenez et al. 2010: d'Eon's skin Gaussians through "
+        "s = t 8.25 (1 - translucency) / width"),
+    ("transmission", "beer-lambert"): (
+        "Beer-Lambert", "The colour seen through the given distance: "
+        "colour ^ (thickness / distance)"),
+    ("transmission", "fast"): (
+        "Fast (GDC 2011)", "pow(N.V (1 - distortion), power) x scale + "
+        "ambient, fading out at the distance: an artist model"),
+}
+
+NO_UPPER_BOUND = 1e30  # sss_field_info.hi for "no upper bound"
+
+
+def enum_items(member, field):
+    """[(IDENTIFIER, label, tooltip, value)]: the add-on's extra choices,
+    then the library's names (sss_material_field_name)."""
+    offset, extras = ENUM_EXTRAS.get(member, (0, []))
+    items = list(extras)
+    for name, value in field["names"]:
+        label, tip = ENUM_TEXT.get(
+            (member, name),
+            (name.replace("-", " ").title(), _sentence(field["help"])))
+        items.append((identifier(name), label, tip, value + offset))
+    return items
+
+
+def _sentence(text):
+    return text[:1].upper() + text[1:]
+
+
+def _label(field):
+    """The field's label, from its key: "transmission_color" -> "Color",
+    "strength_rgb" -> "Strength", "near_sigma" -> "Near Sigma (mm)" (a
+    help that starts with "mm" gives the unit)."""
+    key = field["key"]
+    if key != "transmission" and key.startswith("transmission_"):
+        key = key[len("transmission_"):]
+    if key.endswith("_rgb"):
+        key = key[:-len("_rgb")]
+    label = key.replace("_", " ").title()
+    return label + " (mm)" if field["help"].startswith("mm") else label
+
+
+def field_property(member, field):
+    """The bpy property of one field of the library's material schema:
+    its default, range and help; a help starting with "metres" makes it
+    a length (shown in the scene's units)."""
+    kind, default = field["type"], field["default"]
+    keywords = {"name": _label(field),
+                "description": _sentence(field["help"])}
+    if kind == "enum":
+        items = enum_items(member, field)
+        extras = ENUM_EXTRAS.get(member, (0, []))[1]
+        keywords["default"] = extras[0][0] if extras else next(
+            identifier(n) for n, v in field["names"] if v == int(default))
+        return EnumProperty(items=items, **keywords)
+    lo, hi = field["lo"], field["hi"]
+    if kind == "int":
+        return IntProperty(min=int(lo) + field["lo_open"],
+                           max=min(int(hi), 2**31 - 1), default=int(default),
+                           **keywords)
+    keywords["min"] = lo + 1e-6 if field["lo_open"] else lo
+    if hi < NO_UPPER_BOUND:
+        keywords["max"] = hi
+    else:
+        keywords["soft_max"] = 10.0 * max(default if kind == "rgb"
+                                          else [default]) or 1.0
+    if field["help"].startswith("metres"):
+        keywords.update(unit="LENGTH", precision=5)
+    if kind == "float":
+        if "unit" in keywords:
+            keywords["subtype"] = "DISTANCE"
+        return FloatProperty(default=default, **keywords)
+    keywords["subtype"] = "COLOR" if hi <= 1.0 else "NONE"
+    return FloatVectorProperty(size=3, default=tuple(default), **keywords)
+
+
+def field_properties():
+    """{property name: (member, bpy property)} of every field of the
+    library's material schema that artists set (not DERIVED)."""
+    return {property_name(m): (m, field_property(m, f))
+            for m, f in native.material_fields().items()
+            if m not in DERIVED}
 
 
 class SSSSceneSettings(bpy.types.PropertyGroup):
@@ -225,6 +245,10 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
 
 classes = (SSSMaterialSettings, SSSSceneSettings)
 
+# Why the material settings lack the library's fields (None: they have
+# them); set by register().
+library_error = None
+
 # The scene settings a live re-tune follows (live.py); it follows every
 # material one.
 _SCENE_RETUNE = ("radius_scale", "method", "taps", "live")
@@ -242,6 +266,16 @@ def _follow(cls, names=None):
 
 
 def register():
+    # The library is loaded here (native.py finds it): without it the
+    # material settings are the add-on's own only, and the panels say why.
+    global library_error
+    try:
+        fields = field_properties()
+        library_error = None
+    except native.LibraryError as e:
+        fields, library_error = {}, str(e)
+    for name, (_member, prop) in fields.items():
+        SSSMaterialSettings.__annotations__[name] = prop
     _follow(SSSMaterialSettings)
     _follow(SSSSceneSettings, _SCENE_RETUNE)
     for cls in classes:

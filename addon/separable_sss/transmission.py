@@ -153,9 +153,18 @@ def layer_samples(scene):
 # Object custom properties the override material reads (Attribute node,
 # type Object); set on the objects for the render and removed after.
 PROP_MODE = "sss_tr_mode"      # 0 absorbs, 1 white translucent, 2 slab
-PROP_SIGMA = "sss_tr_sigma"    # per channel, 1 / scene unit
-PROP_A = "sss_tr_a"            # scene units
-PROP_ZB = "sss_tr_zb"          # scene units
+PROP_ROW = "sss_tr_row"        # slab: which table (SLAB_IMAGE's order)
+PROP_STEP = "sss_tr_step"      # slab: the table's step, scene units
+PROP_SCALE = "sss_tr_scale"    # slab: (n - 1) / ln(1 + span / step)
+PROPS = (PROP_MODE, PROP_ROW, PROP_STEP, PROP_SCALE)
+
+# The library's slab table (sss_transmission_table) per slab material: an
+# image TABLE_SIZE x 1 (RGB: T(t) / T(0) per channel), read with linear
+# interpolation and its last sample (0) held beyond it. 4096 samples
+# (64 KB) follow the library within 3.4e-4, at the kink where the slab
+# starts to thin (1024: 1.3e-3; tests/test_transmission.c).
+TABLE_SIZE = 4096
+SLAB_IMAGE = "SSS Slab Transmittance"
 
 
 def _math(tree, op, a, b=None, clamp=False):
@@ -172,24 +181,49 @@ def _math(tree, op, a, b=None, clamp=False):
     return node.outputs[0]
 
 
-def _slab_ratio(tree, t, sigma, a, zb):
-    """Per channel T(t) / T(0) of the library's diffusion slab
-    (csrc/sss_transmission.c, slab_eval): with L = max(t + 2 zb, 2 a),
-    x = sigma L, y = sigma a: (1 - e^{-4y}) e^{-(x - 2y)} / (1 - e^{-2x}).
-    sigma, a and zb are scalar sockets; returns a scalar socket."""
-    big_l = _math(tree, "MAXIMUM",
-                  _math(tree, "ADD", t, _math(tree, "MULTIPLY", zb, 2.0)),
-                  _math(tree, "MULTIPLY", a, 2.0))
-    x = _math(tree, "MULTIPLY", sigma, big_l)
-    y = _math(tree, "MULTIPLY", sigma, a)
-    num = _math(tree, "SUBTRACT", 1.0,
-                _math(tree, "EXPONENT", _math(tree, "MULTIPLY", y, -4.0)))
-    dec = _math(tree, "EXPONENT", _math(tree, "SUBTRACT",
-                                        _math(tree, "MULTIPLY", y, 2.0), x))
-    den = _math(tree, "SUBTRACT", 1.0,
-                _math(tree, "EXPONENT", _math(tree, "MULTIPLY", x, -2.0)))
-    return _math(tree, "DIVIDE", _math(tree, "MULTIPLY", num, dec), den,
-                 clamp=True)
+def _slab_table(tree, t, row, step, scale, images):
+    """Per channel T(t) / T(0) of the object's slab, looked up in the
+    library's table: index ln(1 + t / step) x scale, the table's pixel
+    centres at (index + 0.5) / TABLE_SIZE; row picks the object's image.
+    Returns a colour socket."""
+    index = _math(tree, "MULTIPLY", _math(
+        tree, "LOGARITHM", _math(tree, "ADD", _math(tree, "DIVIDE", t, step),
+                                 1.0), math.e), scale)
+    uv = tree.nodes.new("ShaderNodeCombineXYZ")
+    tree.links.new(_math(tree, "DIVIDE", _math(tree, "ADD", index, 0.5),
+                         float(TABLE_SIZE)), uv.inputs[0])
+    uv.inputs[1].default_value = 0.5
+    out = None
+    for i, image in enumerate(images):
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.image = image
+        tex.interpolation = "Linear"
+        tex.extension = "EXTEND"
+        tree.links.new(uv.outputs[0], tex.inputs["Vector"])
+        if out is None:
+            out = tex.outputs["Color"]
+            continue
+        mix = compat.new_mix_rgb(tree)
+        tree.links.new(out, mix.inputs["Color1"])
+        tree.links.new(tex.outputs["Color"], mix.inputs["Color2"])
+        this = _math(tree, "LESS_THAN", _math(tree, "ABSOLUTE", _math(
+            tree, "SUBTRACT", row, float(i))), 0.5)
+        tree.links.new(this, mix.inputs["Fac"])
+        out = mix.outputs["Color"]
+    return out
+
+
+def slab_image(values, undo):
+    """The image holding one slab table (TABLE_SIZE x 3 floats), as data
+    (Non-Color), removed by undo."""
+    image = bpy.data.images.new(SLAB_IMAGE, TABLE_SIZE, 1, alpha=False,
+                                float_buffer=True, is_data=True)
+    undo.add(lambda: bpy.data.images.remove(image))
+    pixels = [1.0] * (4 * TABLE_SIZE)
+    for i in range(TABLE_SIZE):
+        pixels[4 * i:4 * i + 3] = values[3 * i:3 * i + 3]
+    image.pixels[:] = pixels
+    return image
 
 
 def _camera_view(scene):
@@ -205,13 +239,15 @@ def _camera_view(scene):
     return 1.0, tuple(-cam.matrix_world.translation)
 
 
-def _override_material(distance, undo, need_ao=True, view=None):
+def _override_material(distance, undo, need_ao=True, view=None, images=()):
     """White translucent everywhere a transmitting object is entered; where
     a ray inside an object with the slab model (PROP_MODE 2) reaches its
     surface again, the light that crosses is multiplied per channel by
     T(t) / T(0) with t = ray length x |N . I| (the slab's thickness along
     the normal there: exact for a slab, and averaged over the real chords
-    of a curved part by the samples themselves). The library then reads a
+    of a curved part by the samples themselves), looked up in the
+    library's table for the object's material (images, PROP_ROW's order;
+    slab_image). The library then reads a
     thickness of 0 there and multiplies by T(0). Objects with no
     transmitting material absorb (PROP_MODE 0): they cast shadows and end
     the path instead of passing light on, and surfaces more than
@@ -266,22 +302,16 @@ def _override_material(distance, undo, need_ao=True, view=None):
         grazing = _math(tree, "MULTIPLY", front_exit,
                         _math(tree, "LESS_THAN", cos, GRAZING_COS))
     t = _math(tree, "MULTIPLY", path.outputs["Ray Length"], cos)
-    seps = []
-    for name in (PROP_SIGMA, PROP_A, PROP_ZB):
-        sep = tree.nodes.new("ShaderNodeSeparateXYZ")
-        tree.links.new(attr(name).outputs["Vector"], sep.inputs[0])
-        seps.append(sep)
-    comb = tree.nodes.new("ShaderNodeCombineXYZ")
-    for c in range(3):
-        ratio = _slab_ratio(tree, t, *(sep.outputs[c] for sep in seps))
-        tree.links.new(ratio, comb.inputs[c])
     # slab = (mode > 1.5) x backfacing: leaving the object's medium
     slab = _math(tree, "MULTIPLY", _math(tree, "GREATER_THAN", mode, 1.5),
                  geo.outputs["Backfacing"])
     pick = compat.new_mix_rgb(tree)
     pick.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
     tree.links.new(slab, pick.inputs["Fac"])
-    tree.links.new(comb.outputs[0], pick.inputs["Color2"])
+    if images:
+        tree.links.new(_slab_table(
+            tree, t, *(attr(p).outputs["Fac"] for p in PROPS[1:]), images),
+            pick.inputs["Color2"])
     if view is not None:
         hide = compat.new_mix_rgb(tree)
         hide.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
@@ -324,33 +354,41 @@ def _override_material(distance, undo, need_ao=True, view=None):
 
 
 def _slab_params(scene, found):
-    """(sigma_tr, a, zb) per channel in scene units for a material whose
-    transmission is the library's diffusion slab (the burley model on a
-    Burley profile), after its thickness scale; None otherwise (or when it
-    lets nothing through or everything: thickness scale 0)."""
-    params = slab(scene, found)
-    if params is None:
+    """(step, scale, table) for a material whose transmission is the
+    library's diffusion slab (the burley model on a Burley profile): its
+    table (sss_transmission_table, TABLE_SIZE samples, its thickness scale
+    applied), the table's step in scene units and the index scale (n - 1)
+    / ln(1 + span / step); None otherwise (or when it lets nothing through
+    or everything: thickness scale 0)."""
+    if slab(scene, found) is None:
         return None             # not the slab, or a channel has no medium
-    k = found.material.sss.thickness_scale
+    step, span, table = native.transmission_table(
+        library_material(scene, found), TABLE_SIZE)
     unit = scene.unit_settings.scale_length or 1.0
     length = scene.sss.radius_scale / unit
-    out = ([], [], [])
-    for sigma, a, zb in zip(*params):
-        sigma, a, zb = sigma / length, a * length, zb * length
-        sigma = max(sigma, 1e-3 / a)    # keeps the shader's 0/0 away
-        # T(k t) with (sigma, a, zb) is T(t) with (sigma k, a / k, zb / k)
-        out[0].append(sigma * k)
-        out[1].append(a / k)
-        out[2].append(zb / k)
-    return out
+    return (step * length, (TABLE_SIZE - 1) / math.log1p(span / step),
+            table)
 
 
-def _tag_objects(scene, analysis, undo):
-    """Sets PROP_* on every object the layer renders: 2 for objects with a
-    slab-model material, 1 for other transmitting ones, 0 for the rest."""
-    params = {}
+def _slab_tables(scene, analysis, undo):
+    """{material: (row, step, scale)} of the transmitting materials with
+    the slab model, and their tables' images in row order."""
+    rows, images = {}, []
     for f in transmitting(analysis):
-        params[f.material] = _slab_params(scene, f)
+        params = _slab_params(scene, f)
+        if params is None or f.material in rows:
+            continue
+        step, scale, table = params
+        rows[f.material] = (len(images), step, scale)
+        images.append(slab_image(table, undo))
+    return rows, images
+
+
+def _tag_objects(scene, analysis, rows, undo):
+    """Sets PROP_* on every object the layer renders: 2 for objects with a
+    slab-model material (rows: _slab_tables), with its table's row, step
+    and scale, 1 for other transmitting ones, 0 for the rest."""
+    transmits = {f.material for f in transmitting(analysis)}
     for obj in scene.objects:
         if not hasattr(obj, "material_slots") or obj.type not in (
                 "MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES",
@@ -358,17 +396,15 @@ def _tag_objects(scene, analysis, undo):
             continue
         mode, values = 0, None
         for slot in obj.material_slots:
-            if slot.material in params:
-                p = params[slot.material]
-                if p is not None:
-                    mode, values = 2, p
-                    break
+            if slot.material in rows:
+                mode, values = 2, rows[slot.material]
+                break
+            if slot.material in transmits:
                 mode = 1
-        had = {k: obj.get(k) for k in (PROP_MODE, PROP_SIGMA, PROP_A,
-                                       PROP_ZB) if k in obj}
+        had = {k: obj.get(k) for k in PROPS if k in obj}
 
         def restore(obj=obj, had=had):
-            for k in (PROP_MODE, PROP_SIGMA, PROP_A, PROP_ZB):
+            for k in PROPS:
                 if k in obj:
                     del obj[k]
             for k, v in had.items():
@@ -377,8 +413,8 @@ def _tag_objects(scene, analysis, undo):
         try:
             obj[PROP_MODE] = float(mode)
             if values is not None:
-                obj[PROP_SIGMA], obj[PROP_A], obj[PROP_ZB] = \
-                    [list(map(float, v)) for v in values]
+                for k, v in zip(PROPS[1:], values):
+                    obj[k] = float(v)
         except (TypeError, AttributeError, RuntimeError):
             # A linked, non-editable object: it reads mode 0 (absorbs) in
             # the layer, so it casts shadows but lets no light through.
@@ -408,14 +444,15 @@ def add_layer(scene, analysis, undo, source_layer=None):
                            "for back-lit transmission)")
     source = source_layer or bpy.context.view_layer
     distance = ao_distance(scene, analysis)
-    need_ao = any(_slab_params(scene, f) is None
-                  for f in transmitting(analysis))
-    mat = _override_material(distance, undo, need_ao, _camera_view(scene))
+    rows, images = _slab_tables(scene, analysis, undo)
+    need_ao = any(f.material not in rows for f in transmitting(analysis))
+    mat = _override_material(distance, undo, need_ao, _camera_view(scene),
+                             images)
     layer = scene.view_layers.new(LAYER)
     undo.add(lambda: scene.view_layers.remove(layer))
     if source is not None and source.name in scene.view_layers:
         _copy_collections(source.layer_collection, layer.layer_collection)
-    _tag_objects(scene, analysis, undo)
+    _tag_objects(scene, analysis, rows, undo)
     layer.material_override = mat
     undo.add(lambda: setattr(layer, "material_override", None))
     layer.samples = layer_samples(scene)

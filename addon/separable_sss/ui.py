@@ -9,7 +9,7 @@ import textwrap
 
 import bpy
 
-from . import live, nodes, pipeline, transmission
+from . import live, nodes, pipeline, properties, transmission
 from .presets import SSS_MT_material_presets
 from .properties import method_items
 
@@ -73,6 +73,15 @@ def _material(context, sidebar):
     return getattr(context, "material", None)
 
 
+def _no_fields(col, context):
+    """Says why, where the library was not loaded when the add-on was
+    enabled: the material settings then lack its fields."""
+    if properties.library_error is None:
+        return False
+    _wrapped(col, context, properties.library_error, 'ERROR', lines=6)
+    return True
+
+
 def _has_sss(mat):
     return mat is not None and getattr(mat, "sss", None) is not None
 
@@ -96,6 +105,8 @@ def draw_material_settings(layout, context, mat, split=True):
     layout.use_property_split = split
     layout.use_property_decorate = False
     col = layout.column()
+    if _no_fields(col, context):
+        return
     _prop(col, s, "profile", split)
     if s.profile == 'NONE':
         col.label(text="Not scattered", icon='INFO')
@@ -126,6 +137,8 @@ def draw_material_transmission(layout, mat, split=True):
     layout.use_property_split = split
     layout.use_property_decorate = False
     col = layout.column()
+    if _no_fields(col, bpy.context):
+        return
     col.active = s.profile != 'NONE'
     _prop(col, s, "transmission", split, text="Model")
     if s.transmission == 'OFF':
@@ -153,6 +166,8 @@ def draw_material_advanced(layout, context, mat, split=True):
     layout.use_property_split = split
     layout.use_property_decorate = False
     col = layout.column()
+    if _no_fields(col, context):
+        return
     col.active = s.profile != 'NONE'
     _prop(col, s, "texturing", split)
     if s.profile in {'BLENDER', 'BURLEY'}:

@@ -85,30 +85,90 @@ def test_sizes_come_from_the_library(scene):
     found.material.sss.transmission = "AUTO"
 
 
-def test_material_properties_follow_the_librarys_schema():
-    """Every material setting that is a field of the library's schema
-    (sss_material_field) has the library's default and stays within its
-    range (1e30: no upper bound), so what an artist can set is what the
-    library accepts."""
+def test_material_properties_are_made_from_the_librarys_schema():
+    """Every field of the library's material schema (sss_material_field)
+    that artists set is a material setting made from it: its default, its
+    range (1e30: no upper bound), its help as the tooltip, and for an enum
+    every library name as a choice; the values stored in .blend files stay
+    what they were before the settings came from the table."""
     import numpy as np
     fields = native.material_fields()
     rna = properties.SSSMaterialSettings.bl_rna.properties
-    shared = [m for m in fields if m in rna.keys()]
-    assert len(shared) >= 15, shared
-    for member in shared:
-        f, prop = fields[member], rna[member]
+    offered = [m for m in fields if m not in description.DERIVED]
+    assert len(offered) >= 20, offered
+    for member in offered:
+        f = fields[member]
+        prop = rna[description.property_name(member)]
+        assert prop.description.lower() == f["help"].lower(), member
+        if f["type"] == "enum":
+            values = {i.identifier: i.value for i in prop.enum_items}
+            for name, value in f["names"]:
+                ident = description.identifier(name)
+                assert ident in values, (member, name)
+                assert description.library_name(ident) == name
+            continue
         if f["type"] == "rgb":
             assert list(prop.default_array) == list(
                 np.float32(f["default"])), member
         elif f["type"] == "float":
             assert prop.default == np.float32(f["default"]), member
-        elif f["type"] == "int":
-            assert prop.default == int(f["default"]), member
         else:
-            continue
+            assert prop.default == int(f["default"]), member
         assert prop.hard_min > f["lo"] if f["lo_open"] else \
-            prop.hard_min >= f["lo"], member
-        assert f["hi"] >= 1e30 or prop.hard_max <= f["hi"], member
+            prop.hard_min == np.float32(f["lo"]), member
+        assert prop.hard_max == np.float32(f["hi"]) if f["hi"] < 1e30 \
+            else prop.hard_max > 1e30, member
+    for member in description.DERIVED:
+        assert member in fields and member not in rna.keys()
+    # .blend files hold an enum's value: these are the values the settings
+    # had before they were made from the table.
+    stored = {name: {i.identifier: i.value for i in rna[name].enum_items}
+              for name in ("mapping", "transmission", "texturing")}
+    assert stored["mapping"] == {
+        "AUTO": 0, "CYCLES": 1, "EEVEE": 2, "RANDOM_WALK": 3,
+        "CYCLES_RANDOM_WALK": 4, "CYCLES4_RANDOM_WALK": 5}
+    assert stored["transmission"] == {
+        "AUTO": 5, "OFF": 0, "BURLEY": 1, "JIMENEZ": 2, "BEER_LAMBERT": 3,
+        "FAST": 4}
+    assert stored["texturing"] == {"POST": 0, "PRE_AND_POST": 1}
+    # The profile choices are the library's profiles, with From Material.
+    assert {i.identifier for i in rna["profile"].enum_items} == {"BLENDER"} \
+        | {description.identifier(n) for n in native.profiles()}
+
+
+def test_material_entries_are_the_schemas_fields(scene):
+    """The description's material entry has a key for every field of the
+    schema its profile reads (transmission's only while it transmits),
+    from the material's setting, and the library reads it as it is."""
+    found = analysis.analyse(scene).materials[0]
+    s = found.material.sss
+    saved = (s.profile, s.transmission, s.taps)
+    fields = native.material_fields()
+    kinds = native.profiles()
+    try:
+        for profile in ("BURLEY", "GAUSSIANS", "JIMENEZ", "NEAR_FAR"):
+            for model in ("OFF", "FAST"):
+                s.profile, s.transmission, s.taps = profile, model, 5
+                entry = description.material_entry(found)
+                kind = kinds[description.library_name(profile)]
+                want = {f["key"] for m, f in fields.items()
+                        if m not in description.DERIVED
+                        and f["profile"] in (-1, kind)
+                        and not (f["transmits"] and model == "OFF")}
+                got = set(entry) - {"pass_index", "name", "profile",
+                                    "calibration"}
+                assert got == want, (profile, model, got ^ want)
+                assert entry["taps"] == 5
+                assert entry["transmission"] == \
+                    description.library_name(model)
+                with native.Scene(text=json.dumps(
+                        {"version": 1, "materials": [
+                            dict(entry, pass_index=1)]})) as sc:
+                    assert sc.warnings == [], (profile, model)
+        s.taps = 0          # 0: the profile's own, so not written
+        assert "taps" not in description.material_entry(found)
+    finally:
+        s.profile, s.transmission, s.taps = saved
 
 
 def test_required_passes_are_the_librarys(scene):
