@@ -16,8 +16,11 @@
  * half-widths that occur (every 1/32 pixel, interpolated), sparse weights do
  * not depend on the half-width at all, so the per-sample work is a handful
  * of multiplications that run on eight AVX2 lanes where the CPU has them.
- * The vertical pass runs as a horizontal one over a transposed copy, so
- * both read memory in order.
+ * Sparse taps are read by the vector loop itself (both sides' offsets and
+ * weights made once per material), and their far part is summed at every
+ * STRIDE-th pixel and interpolated between (blur_pixel). The vertical pass
+ * runs as a horizontal one over a transposed copy, so both read memory in
+ * order.
  */
 #include "sss_internal.h"
 #include "sss_blur1d.h"
