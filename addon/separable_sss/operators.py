@@ -10,7 +10,7 @@ import time
 
 import bpy
 from bpy.app.handlers import persistent
-from bpy.props import BoolProperty
+from bpy.props import BoolProperty, StringProperty
 
 from . import blender_compat as compat
 from . import live, native, nodes, pipeline, render_flow
@@ -36,7 +36,8 @@ def _one_line(ex):
 
 
 def _done_text(job, image):
-    path = job.output_exr or (image.filepath if image else "")
+    path = job.output_exr if job.write else \
+        "image '%s' (Save SSS Result writes it)" % image.name
     parts = [job.summary] if job.summary else []
     parts.append(pipeline.timings_text(job))
     if pipeline.methods_text(job):
@@ -99,9 +100,11 @@ class _Run:
     # the bundled scenes (writing the EXR dominates): the bar moves by
     # what is done, not by the clock.
     STAGES = (("read", 0.3), ("scatter", 0.2), ("write", 0.5))
+    STAGES_IN_MEMORY = (("read", 0.6), ("scatter", 0.4))
 
     def __init__(self, job):
         self.job = job
+        self.stages = self.STAGES if job.write else self.STAGES_IN_MEMORY
         self.error = None
         self.started = time.monotonic()
         self.stage, self.done = "read", 0.0
@@ -113,7 +116,7 @@ class _Run:
     def fraction(self):
         """Share of the whole run done, 0..1."""
         total = 0.0
-        for stage, weight in self.STAGES:
+        for stage, weight in self.stages:
             if stage == self.stage:
                 return total + weight * self.done
             total += weight
@@ -133,6 +136,12 @@ class _SSSRunBase:
     bl_options = {'REGISTER', 'UNDO'}
     prepare = None  # subclasses: prepare(context) -> pipeline.Job
 
+    def _prepare(self, context):
+        """The job, its result shown in memory (no file written)."""
+        job = self.prepare(context)
+        job.write = False
+        return job
+
     def _nothing_to_do(self, context):
         """A scene where nothing scatters is left alone, and we say so."""
         if pipeline.analyse(context.scene).materials:
@@ -146,7 +155,7 @@ class _SSSRunBase:
         try:
             if self._nothing_to_do(context):
                 return {'CANCELLED'}
-            job = self.prepare(context)
+            job = self._prepare(context)
             pipeline.scatter(job)
             image = pipeline.finish(context, job)
         except Exception as ex:
@@ -163,7 +172,7 @@ class _SSSRunBase:
         try:
             if self._nothing_to_do(context):
                 return {'CANCELLED'}
-            job = self.prepare(context)
+            job = self._prepare(context)
         except Exception as ex:
             self.report({'ERROR'}, _one_line(ex))
             return {'CANCELLED'}
@@ -210,9 +219,8 @@ class _SSSRunBase:
     def _finish(self, context):
         scene = bpy.data.scenes.get(self._scene_name)
         if scene is None:
-            self.report({'ERROR'}, "SSS: the scene %r is gone; the result "
-                        "is in %s" % (self._scene_name,
-                                      self._run.job.output_exr))
+            self.report({'ERROR'}, "SSS: the scene %r is gone; its result "
+                        "was not shown" % self._scene_name)
             return {'CANCELLED'}
         try:
             if scene == context.scene:
@@ -429,6 +437,45 @@ class SSS_OT_scatter_image(bpy.types.Operator):
         return {'FINISHED'}
 
 
+class SSS_OT_save_result(bpy.types.Operator):
+    """Write the SSS result the compositor shows as a multilayer EXR: the
+    render's passes with the layer SSS (Combined, DiffLight), as the sss
+    command writes it"""
+    bl_idname = "sss.save_result"
+    bl_label = "Save SSS Result"
+
+    filepath: StringProperty(subtype='FILE_PATH')
+    filter_glob: StringProperty(default="*.exr", options={'HIDDEN'})
+
+    @classmethod
+    def poll(cls, context):
+        entry = live.kept(context.scene)
+        if entry is None or not entry.description:
+            cls.poll_message_set("No SSS result is kept: render with SSS "
+                                 "first")
+            return False
+        return True
+
+    def invoke(self, context, _event):
+        if not self.filepath:
+            scene = context.scene
+            self.filepath = pipeline.paths_for(scene, scene.frame_current)[1]
+        context.window_manager.fileselect_add(self)
+        return {'RUNNING_MODAL'}
+
+    def execute(self, context):
+        path = bpy.path.abspath(self.filepath)
+        if not path.lower().endswith(".exr"):
+            path += ".exr"
+        try:
+            pipeline.save_result(context.scene, path)
+        except Exception as ex:
+            self.report({'ERROR'}, _one_line(ex))
+            return {'CANCELLED'}
+        self.report({'INFO'}, "SSS result written to %s" % path)
+        return {'FINISHED'}
+
+
 class SSS_OT_render_frame(bpy.types.Operator):
     """Render the active scene (F12; Ctrl F12: the animation). With the
     scene's Screen-space SSS on, the render runs in the foreground so that
@@ -460,7 +507,7 @@ class SSS_OT_render_frame(bpy.types.Operator):
 
 classes = (SSS_OT_render, SSS_OT_apply, SSS_OT_remove_setup,
            SSS_OT_assign_pass_indices, SSS_OT_scatter_image,
-           SSS_OT_render_frame)
+           SSS_OT_save_result, SSS_OT_render_frame)
 
 _register_classes, _unregister_classes = \
     bpy.utils.register_classes_factory(classes)

@@ -36,6 +36,10 @@ class Job:
     # What scatter() read and made, kept by finish() for live re-tunes.
     frame: object = None            # native.Frame
     combined: object = None         # numpy height x width x 4
+    # Whether scatter() writes output_exr (scripts and farms want the
+    # file); the operators show the result in memory instead, and Save
+    # SSS Result writes it when wanted.
+    write: bool = True
 
 
 def output_path(scene):
@@ -187,16 +191,18 @@ def scatter(job, progress=None):
                                  progress=told("read"))
             timings["read"] = time.perf_counter() - started
             combined = np.empty((frame.height, frame.width, 4), np.float32)
-            light = np.empty((frame.height, frame.width, 3), np.float32)
+            light = np.empty((frame.height, frame.width, 3), np.float32) \
+                if job.write else None
             timings.update(frame.scatter(scene, combined, light,
                                          radius_scale=radius_scale,
                                          progress=progress))
-            if progress is not None:
-                progress("write", 0.0)
-            started = time.perf_counter()
-            frame.write(job.output_exr, combined, light,
-                        progress=told("write"))
-            timings["write"] = time.perf_counter() - started
+            if job.write:
+                if progress is not None:
+                    progress("write", 0.0)
+                started = time.perf_counter()
+                frame.write(job.output_exr, combined, light,
+                            progress=told("write"))
+                timings["write"] = time.perf_counter() - started
     except native.LibraryError as e:
         if frame is not None:
             frame.close()
@@ -207,7 +213,16 @@ def scatter(job, progress=None):
 
 
 def finish(context, job):
-    """Loads the result as an image and wires it into the compositor."""
+    """Shows the result in the compositor, the frame kept for live
+    re-tunes: the file scatter() wrote, loaded as an image, or (job.write
+    off) the pixels pushed into the scene's in-memory image."""
+    scene = context.scene
+    entry = None
+    if job.frame is not None:
+        entry = live.keep(scene, job.layer, job.frame, job.combined)
+        job.frame = job.combined = None
+    if not job.write:
+        return live.show(scene, entry)
     name = os.path.basename(job.output_exr)
     image = bpy.data.images.get(name)
     if image is not None and bpy.path.abspath(image.filepath) == \
@@ -216,18 +231,38 @@ def finish(context, job):
     else:
         image = bpy.data.images.load(job.output_exr, check_existing=False)
         image.name = name
-    context.scene.sss.last_result = job.output_exr
-    nodes.ensure_setup(context.scene, image)
-    if job.frame is not None:
-        live.keep(context.scene, job.layer, job.frame, job.combined)
-        job.frame = job.combined = None
+    scene.sss.last_result = job.output_exr
+    nodes.ensure_setup(scene, image)
     return image
+
+
+def save_result(scene, path):
+    """Writes the scene's kept frame with its current result as the `sss`
+    command does (every input channel and the SSS layer, atomically):
+    scattered once more with the description it is shown with, for the
+    diffuse light the compositor's image does not hold."""
+    entry = live.kept(scene)
+    if entry is None:
+        raise SSSError("no SSS result is kept for this scene: render with "
+                       "SSS first")
+    if not entry.description:
+        raise SSSError("the kept result has not been scattered yet")
+    combined = np.empty_like(entry.combined)
+    light = np.empty(combined.shape[:2] + (3,), np.float32)
+    try:
+        with native.Scene(text=entry.description) as desc:
+            entry.frame.scatter(desc, combined, light)
+        entry.frame.write(path, combined, light)
+    except native.LibraryError as e:
+        raise SSSError(str(e)) from None
+    scene.sss.last_result = path
+    return path
 
 
 def timings_text(job):
     t = job.timings
-    return (f"read {t.get('read', 0):.2f} s, SSS {t.get('scatter', 0):.2f} s,"
-            f" write {t.get('write', 0):.2f} s")
+    text = f"read {t.get('read', 0):.2f} s, SSS {t.get('scatter', 0):.2f} s"
+    return text + (f", write {t['write']:.2f} s" if "write" in t else "")
 
 
 def methods_text(job):

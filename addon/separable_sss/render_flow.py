@@ -145,17 +145,35 @@ class Flow:
         view_layer = bpy.context.view_layer
         layer = view_layer.name if view_layer and \
             view_layer.name in self.layers else self.layers[0]
-        old = (node.image, node.layer if node.image else None,
+        multilayer = node.image is not None and node.image.type == 'MULTILAYER'
+        old = (node.image, node.layer if multilayer else None,
                node.frame_start, node.frame_offset, node.frame_duration)
+        # Where its image went: an in-memory result (Render with SSS,
+        # a live re-tune) leaves by the Image socket, a file's by the SSS
+        # layer's Combined, which is what this render's file shows.
+        tree = self.tree
+        went = [(link.from_socket.identifier, link.to_socket)
+                for out in node.outputs for link in out.links]
 
-        def restore(n=node, o=old):
+        def restore(n=node, o=old, went=went):
             n.image = o[0]
             if o[1]:
                 n.layer = o[1]
             n.frame_start, n.frame_offset, n.frame_duration = o[2:]
+            for ident, to in went:
+                source = next((s for s in n.outputs if s.identifier == ident),
+                              None)
+                if source is not None and not any(
+                        link.from_socket == source for link in to.links):
+                    tree.links.new(source, to)
         self.tree_undo.add(restore)
         node.image = self.images[layer]
         node.layer = nodes.RESULT_LAYER
+        source = node.outputs.get(nodes.RESULT_PASS)
+        for _, to in went:
+            if source is not None and not any(
+                    link.from_socket == source for link in to.links):
+                tree.links.new(source, to)
         self._follow_frames(node)
 
     def _result_nodes(self, node):

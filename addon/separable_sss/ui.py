@@ -282,6 +282,8 @@ class SSS_PT_node_main(_SidebarPanel, bpy.types.Panel):
                 getattr(context.space_data, "edit_tree", None) and
                 context.space_data.edit_tree.nodes.active):
             col.operator("sss.scatter_image", icon='NODE_COMPOSITING')
+        if live.kept(scene) is not None:
+            col.operator("sss.save_result", icon='FILE_TICK')
         problem = pipeline.scene_problem(scene)
         if problem:
             _wrapped(layout, context, problem, 'ERROR')

@@ -109,11 +109,12 @@ def test_render_principled_v2(tmp_path):
     scene.sss.output_dir = str(tmp_path / "out")
     before = snapshot(scene)
     assert bpy.ops.sss.render() == {'FINISHED'}
-    result = scene.sss.last_result
-    assert result and os.path.exists(result)
     after = snapshot(scene)
     after["node_tree"] = before["node_tree"]   # the result set-up was added
     assert diff(before, after) == []
+    result = str(tmp_path / "saved.exr")
+    assert bpy.ops.sss.save_result(filepath=result) == {'FINISHED'}
+    assert scene.sss.last_result == result and os.path.exists(result)
     # The composite shows the SSS result.
     composite = compat.composite_input(compat.compositor_tree(scene),
                                        create=False)

@@ -60,17 +60,26 @@ def test_render_operator(blends, tmp_path):
     scene.sss.output_dir = str(tmp_path)
     before = snapshot(scene)
     assert bpy.ops.sss.render() == {"FINISHED"}
-    result = scene.sss.last_result
-    assert os.path.exists(result)
+    # The result is shown from memory: no file is written for it.
+    assert scene.sss.last_result == ""
+    assert not any(name.endswith("_sss.exr") for name in os.listdir(tmp_path))
     node, reached = result_wiring(scene)
-    assert bpy.path.abspath(node.image.filepath) == result
+    assert node.image.source == 'GENERATED' and node.image.is_float
     composite = compat.composite_input(compat.compositor_tree(scene),
                                        create=False)
     assert composite is not None and composite.node.name in reached
     after = snapshot(scene)
     after["node_tree"] = before["node_tree"]  # the set-up was added
     assert diff(before, after) == []
+    # Save SSS Result writes it, as the sss command would.
+    result = str(tmp_path / "saved.exr")
+    assert bpy.ops.sss.save_result(filepath=result) == {"FINISHED"}
+    assert scene.sss.last_result == result
     ch, _ = read_channels(result)
+    shown = np.empty(node.image.size[0] * node.image.size[1] * 4, np.float32)
+    node.image.pixels.foreach_get(shown)
+    shown = shown.reshape(node.image.size[1], node.image.size[0], 4)[::-1]
+    assert np.abs(shown[..., :3] - pass_rgb(ch, "SSS.Combined")).max() < 1e-5
     index = ch["ViewLayer.IndexMA.X"]
     changed = np.abs(pass_rgb(ch, "SSS.Combined") -
                      pass_rgb(ch, "ViewLayer.Combined")).max(-1) > 1e-5

@@ -16,7 +16,7 @@ from helpers import BLENDER, BUILD, ROOT, build_blend, compat, diff, \
     load_addon, snapshot
 
 separable_sss = load_addon()
-from separable_sss import pipeline, render_flow  # noqa: E402
+from separable_sss import nodes, pipeline, render_flow  # noqa: E402
 
 import faults  # noqa: E402
 
@@ -112,6 +112,11 @@ def test_render_with_sss_setup_never_shows_an_old_result(blend, tmp_path):
     scene.sss.enabled = True
     got = render_still(scene, tmp_path / "still")
     assert np.abs(got - want).max() <= 1.5 / 255
+    # Afterwards the set-up shows Render with SSS's in-memory result again.
+    node = nodes.find_result(scene)
+    assert node.image.source == 'GENERATED'
+    assert [link.to_node.bl_idname for link in node.outputs["Image"].links] \
+        == ["CompositorNodeGroup"]
 
 
 def test_transmission_as_for_stills(tmp_path):
