@@ -108,6 +108,11 @@ const char *sss__range_text(double lo, double hi, int lo_open, int integer,
  * sss_apply runs it; the first bad member named with its range. */
 sss_result sss__options_check(const sss_options *o, char *errbuf,
                               size_t errbuf_len);
+/* Whether v is in the range of option `key` (its scene description
+ * key), said into range ("finite and >= 0"): for what overrides an
+ * option (sss_process_options). */
+int sss__option_in_range(const char *key, double v, char *range,
+                         size_t range_len);
 
 /* Profiles (sss_profile.c). A support beyond max_support (scene units;
  * 0 = no limit) is shrunk to it, profile lengths with it: see

@@ -19,8 +19,10 @@
  *   help     one line: what it is, for documentation, the add-on and
  *            `sss --help`; a quantity's unit first
  *
- * sss_status.c makes sss_options_default from it, sss_apply.c the
- * options' check, sss_scene.c the JSON reader's top-level keys,
+ * sss_status.c makes sss_options_default from it, sss_options.c the
+ * options' check (sss_apply's, and sss_frame.c's of the radius scale
+ * that sss_process_options multiplies), sss_scene.c the JSON reader's
+ * top-level keys,
  * sss_option_field() hands it to the `sss` command (its ranges and
  * messages) and the add-on, and tests/test_scene.c checks docs/scene.md
  * against it. */

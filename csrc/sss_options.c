@@ -93,6 +93,21 @@ static sss_result check_field(const sss_options *o, const field *f,
 	return SSS_OK;
 }
 
+int sss__option_in_range(const char *key, double v, char *range,
+                          size_t range_len)
+{
+	for (int k = 0; k < SSS__COUNT(fields); k++) {
+		const field *f = &fields[k];
+		if (strcmp(f->key, key) != 0)
+			continue;
+		sss__range_text(f->lo, f->hi, f->lo_open, f->type == SSS_FIELD_INT,
+		                range, range_len);
+		return sss__in_range(v, f->lo, f->hi, f->lo_open);
+	}
+	snprintf(range, range_len, "?");
+	return 0;
+}
+
 sss_result sss__options_check(const sss_options *o, char *errbuf,
                               size_t errbuf_len)
 {
