@@ -61,8 +61,7 @@ LIB_INC := $(EXR_INC) -I/usr/include/cjson
 LDLIBS  := -lOpenEXRCore -ldeflate -lcjson -lm -pthread
 
 LIB_SRC   := $(sort $(filter-out csrc/sss_main.c,$(wildcard csrc/sss_*.c)))
-LIB_HDR   := csrc/sss.h csrc/sss_internal.h csrc/sss_blur1d.h \
-             csrc/sss_transmission.h
+LIB_HDR   := $(sort $(wildcard csrc/sss*.h))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TESTS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC)) \
              $(BUILD)/tests/fuzz_replay

@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 12
+#define SSS_ABI_VERSION 13
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -368,12 +368,14 @@ enum sss_field_type {
 	SSS_FIELD_FLOAT = 0, /* float */
 	SSS_FIELD_RGB = 1,   /* float[3] */
 	SSS_FIELD_INT = 2,   /* int32_t in [lo, hi] */
-	SSS_FIELD_ENUM = 3   /* int32_t, one of values[], named names[] */
+	SSS_FIELD_ENUM = 3,  /* int32_t, one of values[], named names[] */
+	SSS_FIELD_DOUBLE = 4 /* double (sss_option_field only) */
 };
 
 typedef struct sss_field_info {
 	const char *key;      /* the JSON key */
-	const char *member;   /* the sss_material member it sets */
+	const char *member;   /* the member it sets (sss_material's, or
+	                         sss_options' for sss_option_field) */
 	int32_t type;         /* sss_field_type */
 	int32_t profile;      /* the sss_profile_kind reading it, -1 = every */
 	int32_t transmits;    /* 1: read and checked only when transmission
@@ -543,6 +545,19 @@ typedef struct sss_options {
 #define SSS_DEFAULT_TAPS 33
 
 SSS_API void sss_options_default(sss_options *opt);
+
+/* The options' schema, one entry per sss_options member in the order
+ * sss_apply checks them, with its key at a scene description's top level
+ * (docs/scene.md; "threads" sets num_threads), sss_options_default's
+ * value, its range and one line of help, as sss_material_field gives a
+ * material's: type SSS_FIELD_FLOAT (float), SSS_FIELD_DOUBLE,
+ * SSS_FIELD_INT (lo..hi, inclusive; hi 2147483647: no upper bound) or
+ * SSS_FIELD_ENUM (the method: values 0..name_count - 1, named by
+ * sss_method_name). A number's hi 1e30 means no upper bound (finite; a
+ * scene description's at most 1e30), +Inf none at all. profile is -1,
+ * transmits 0. SSS_ERR_INVALID_ARGUMENT past the last one or when info
+ * is NULL. */
+SSS_API sss_result sss_option_field(int32_t i, sss_field_info *info);
 
 /* Sizes of the public structs, so bindings can check their layouts. */
 SSS_API size_t sss_struct_size(const char *struct_name);

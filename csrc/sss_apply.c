@@ -76,40 +76,6 @@ static float *packed_output(const sss_image *a, const sss_image *b)
 	return NULL;
 }
 
-static sss_result check_options(const sss_options *o, char *errbuf,
-                                size_t errbuf_len)
-{
-	if (o->struct_size != sizeof *o)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: struct_size %u, "
-		             "expected %zu (use sss_options_default)", o->struct_size,
-		             sizeof *o);
-	if (!sss_method_name(o->method))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: unknown method %d",
-		             o->method);
-	if (!(isfinite(o->radius_scale) && o->radius_scale >= 0.0f))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: radius_scale %g "
-		             "must be finite and >= 0", (double)o->radius_scale);
-	if (o->taps < 1 || o->taps > 4097)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: taps %d must be "
-		             "1..4097", o->taps);
-	if (o->num_threads < 0 || o->num_threads > 256)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: num_threads %d "
-		             "must be 0 (all cores) .. 256", o->num_threads);
-	if (!(o->background_depth > 0.0))
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: background_depth "
-		             "%g must be > 0", o->background_depth);
-	if (o->max_support_px < 1)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: max_support_px %d "
-		             "must be >= 1", o->max_support_px);
-	if (o->samples < 1 || o->samples > 4096)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: samples %d must be "
-		             "1..4096", o->samples);
-	if (o->crease != 0 && o->crease != 1)
-		return FAILX(SSS_ERR_INVALID_ARGUMENT, "options: crease %d must be "
-		             "0 or 1", o->crease);
-	return SSS_OK;
-}
-
 static void add_scaled(float *acc, const sss_image *light_a,
                        const sss_image *light_b, const sss_image *colour,
                        int32_t x, int32_t y)
@@ -512,7 +478,7 @@ static sss_result check_call(const sss_passes *p, const sss_camera *cam,
 	sss_options_default(opt);
 	if (user_opt)
 		*opt = *user_opt;
-	if ((r = check_options(opt, errbuf, errbuf_len)))
+	if ((r = sss__options_check(opt, errbuf, errbuf_len)))
 		return r;
 
 	if ((r = sss__check_image("DiffDir", &p->diff_dir, 3, 1, p->diff_dir.width,

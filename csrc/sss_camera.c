@@ -6,42 +6,89 @@
  * a fraction of that side. Depth is planar view Z, so a pixel's position
  * is ((u - cx) z / fx, (cy - v) z / fy, z) for perspective cameras.
  */
+#include "sss_camera_fields.h"
 #include "sss_internal.h"
+
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+/* The camera's schema (sss_camera_fields.h) as data. */
+typedef struct field {
+	const char *member;
+	int32_t type; /* sss_field_type: SSS_FIELD_ENUM or SSS_FIELD_DOUBLE */
+	int32_t when;
+	size_t offset;
+	double lo, hi;
+	int32_t lo_open;
+	const sss__name_value *names;
+	int32_t name_count;
+} field;
+
+#define TYPE_ENUM SSS_FIELD_ENUM
+#define TYPE_F64 SSS_FIELD_DOUBLE
+#define ROW(...) ROW_(__VA_ARGS__)
+#define ROW_(key, member, type, place, when, def, lo, hi, lo_open, names, \
+             count, help) \
+	{#member, TYPE_##type, SSS__CAM_##when, offsetof(sss_camera, member), \
+	 lo, hi, lo_open, names, count},
+static const field fields[] = {SSS_CAMERA_FIELDS(ROW)};
+#undef ROW
+#undef ROW_
+#undef TYPE_ENUM
+#undef TYPE_F64
+
+/* One member against its row. */
+static sss_result check_field(const sss_camera *cam, const field *f,
+                              char *errbuf, size_t errbuf_len)
+{
+	const char *at = (const char *)cam + f->offset;
+	if (f->type == SSS_FIELD_ENUM) {
+		int32_t v;
+		memcpy(&v, at, sizeof v);
+		for (int j = 0; j < f->name_count; j++)
+			if (f->names[j].value == v)
+				return SSS_OK;
+		char list[64] = "";
+		for (int j = 0; j < f->name_count; j++) {
+			size_t used = strlen(list);
+			snprintf(list + used, sizeof list - used, "%s%d", j ? ", " : "",
+			         f->names[j].value);
+		}
+		return FAIL("camera: unknown %s %d (expected %s)", f->member, v,
+		            list);
+	}
+	double v;
+	memcpy(&v, at, sizeof v);
+	char range[48];
+	if (!sss__in_range(v, f->lo, f->hi, f->lo_open))
+		return FAIL("camera: %s = %g is out of range (must be %s)",
+		            f->member, v, sss__range_text(f->lo, f->hi, f->lo_open,
+		                                          0, range, sizeof range));
+	return SSS_OK;
+}
 
 sss_result sss__projection_make(const sss_camera *cam, int32_t width,
                                 int32_t height, sss__projection *p,
                                 char *errbuf, size_t errbuf_len)
 {
-#define BAD(field, cond) \
-	if (!(isfinite(cam->field) && (cond))) \
-		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT, \
-		                 "camera: " #field " = %g is out of range", \
-		                 (double)cam->field)
 	if (cam->struct_size != sizeof *cam)
-		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
-		                 "camera: struct_size %u, expected %zu (use "
-		                 "sss_camera_default)", cam->struct_size, sizeof *cam);
-	if (cam->type != SSS_CAMERA_PERSPECTIVE &&
-	    cam->type != SSS_CAMERA_ORTHOGRAPHIC)
-		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
-		                 "camera: unknown type %d", cam->type);
-	if (cam->sensor_fit < SSS_SENSOR_FIT_AUTO ||
-	    cam->sensor_fit > SSS_SENSOR_FIT_VERTICAL)
-		return sss__fail(errbuf, errbuf_len, SSS_ERR_INVALID_ARGUMENT,
-		                 "camera: unknown sensor_fit %d", cam->sensor_fit);
-	BAD(pixel_aspect_x, cam->pixel_aspect_x > 0);
-	BAD(pixel_aspect_y, cam->pixel_aspect_y > 0);
-	BAD(unit_scale, cam->unit_scale > 0);
-	BAD(shift_x, 1);
-	BAD(shift_y, 1);
-	if (cam->type == SSS_CAMERA_PERSPECTIVE) {
-		BAD(lens_mm, cam->lens_mm > 0);
-		BAD(sensor_width_mm, cam->sensor_width_mm > 0);
-		BAD(sensor_height_mm, cam->sensor_height_mm > 0);
-	} else {
-		BAD(ortho_scale, cam->ortho_scale > 0);
-	}
-#undef BAD
+		return FAIL("camera: struct_size %u, expected %zu (use "
+		            "sss_camera_default)", cam->struct_size, sizeof *cam);
+	/* The enums first: which lengths are read depends on the type. */
+	for (int pass = 0; pass < 2; pass++)
+		for (int k = 0; k < SSS__COUNT(fields); k++) {
+			const field *f = &fields[k];
+			if ((f->type == SSS_FIELD_ENUM) != !pass ||
+			    (f->when == SSS__CAM_PERSP &&
+			     cam->type != SSS_CAMERA_PERSPECTIVE) ||
+			    (f->when == SSS__CAM_ORTHO &&
+			     cam->type != SSS_CAMERA_ORTHOGRAPHIC))
+				continue;
+			sss_result r = check_field(cam, f, errbuf, errbuf_len);
+			if (r)
+				return r;
+		}
 
 	double ycor = cam->pixel_aspect_y / cam->pixel_aspect_x;
 	int fit = cam->sensor_fit;

@@ -180,10 +180,12 @@ sss_result sss__process_options_check(const sss_process_options *opt,
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
 		                 "process options: struct_size %u, expected %zu",
 		                 opt->struct_size, sizeof *opt);
-	if (!(isfinite(opt->radius_scale) && opt->radius_scale >= 0.0f))
+	char range[48];
+	if (!sss__option_in_range("radius_scale", opt->radius_scale, range,
+	                          sizeof range))
 		return sss__fail(err, errlen, SSS_ERR_INVALID_ARGUMENT,
-		                 "radius scale %g must be finite and >= 0",
-		                 (double)opt->radius_scale);
+		                 "radius scale %g must be %s",
+		                 (double)opt->radius_scale, range);
 	return SSS_OK;
 }
 

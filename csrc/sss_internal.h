@@ -95,6 +95,25 @@ sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
                             __VA_ARGS__)
 #define FAILX(code, ...) sss__fail(errbuf, errbuf_len, code, __VA_ARGS__)
 
+/* A value against a schema row's range (sss_option_fields.h,
+ * sss_camera_fields.h): at least lo (more than lo when lo_open) and at
+ * most hi, where hi from 1e30 up means no upper bound but a finite value
+ * and INFINITY none at all; NaN is never in range. */
+int sss__in_range(double v, double lo, double hi, int lo_open);
+/* The range as a message says it: "0..256", ">= 1" (integer), "> 0",
+ * "finite and >= 0", "finite", "in [0, 1]"; into buf, returned. */
+const char *sss__range_text(double lo, double hi, int lo_open, int integer,
+                            char *buf, size_t len);
+/* The options' check (sss_options.c, from sss_option_fields.h), as
+ * sss_apply runs it; the first bad member named with its range. */
+sss_result sss__options_check(const sss_options *o, char *errbuf,
+                              size_t errbuf_len);
+/* Whether v is in the range of option `key` (its scene description
+ * key), said into range ("finite and >= 0"): for what overrides an
+ * option (sss_process_options). */
+int sss__option_in_range(const char *key, double v, char *range,
+                         size_t range_len);
+
 /* Profiles (sss_profile.c). A support beyond max_support (scene units;
  * 0 = no limit) is shrunk to it, profile lengths with it: see
  * sss__reach_limit. */

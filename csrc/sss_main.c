@@ -16,6 +16,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* A printf format: the ranges, defaults and help of --samples,
+ * --radius-scale and --threads are the library's options schema's
+ * (print_usage). */
 static const char usage_text[] =
 "usage: sss INPUT.exr -o OUTPUT.exr --scene SCENE.json [options]\n"
 "\n"
@@ -41,9 +44,9 @@ static const char usage_text[] =
 "  -f, --frames LIST       frames for #### patterns: 1-240, 1-240x2, 7,9,12-20\n"
 "  -m, --method NAME       scattering method, one of those below (default:\n"
 "                          the scene's, else auto)\n"
-"      --samples N         disk method: most samples per pixel, 1..4096\n"
-"                          (default: the scene's, else 64)\n"
-"  -r, --radius-scale F    multiply every radius by F >= 0 (0 = no scattering:\n"
+"      --samples N         %s, %s\n"
+"                          (default: the scene's, else %s)\n"
+"  -r, --radius-scale F    multiply every radius by F %s (0 = no scattering:\n"
 "                          SSS.Combined is then the recombined passes; a\n"
 "                          back light baked at the scene's radius takes only\n"
 "                          1 or 0)\n"
@@ -51,7 +54,8 @@ static const char usage_text[] =
 "  -c, --compression NAME  output compression: zip (default), zips, piz,\n"
 "                          rle, pxr24, b44, b44a, none (lossless: zip, zips,\n"
 "                          piz, rle, none)\n"
-"  -t, --threads N         threads, 0 = all cores (default: the scene's)\n"
+"  -t, --threads N         %s, %s\n"
+"                          (default: the scene's, else %s)\n"
 "      --max-size WxH      refuse inputs larger than this, each 1..1048576\n"
 "                          (default 32768x32768 and 2^28 pixels in all)\n"
 "      --max-channels N    refuse inputs with more channels (default 4096)\n"
@@ -89,11 +93,54 @@ typedef struct args {
 	int resume;
 } args;
 
+/* The row of the library's options schema (sss_option_field) for a
+ * scene description key; the command's options that set the same
+ * member take its range, default and help from it. */
+static sss_field_info option_field(const char *key)
+{
+	sss_field_info f;
+	for (int32_t i = 0; sss_option_field(i, &f) == SSS_OK; i++)
+		if (strcmp(f.key, key) == 0)
+			return f;
+	/* Not reached with the library this was built with. */
+	memset(&f, 0, sizeof f);
+	f.key = key;
+	f.help = key;
+	f.hi = -1;
+	return f;
+}
+
+/* The field's range as the command says it: "0..256", ">= 0". */
+static const char *range_text(const sss_field_info *f, char *buf,
+                              size_t len)
+{
+	if (f->hi >= (f->type == SSS_FIELD_INT ? INT32_MAX : 1e30))
+		snprintf(buf, len, "%s %g", f->lo_open ? ">" : ">=", f->lo);
+	else
+		snprintf(buf, len, "%g..%g", f->lo, f->hi);
+	return buf;
+}
+
 /* The options, then the library's methods with what each trades (words
  * wrapped to 78 columns), then the examples. */
 static void print_usage(void)
 {
-	fputs(usage_text, stdout);
+	sss_field_info samples = option_field("samples");
+	sss_field_info scale = option_field("radius_scale");
+	sss_field_info threads = option_field("threads");
+	char samples_range[48], scale_range[48], threads_range[48];
+	char samples_default[24], threads_default[24];
+	snprintf(samples_default, sizeof samples_default, "%g",
+	         samples.default_value[0]);
+	snprintf(threads_default, sizeof threads_default, "%g",
+	         threads.default_value[0]);
+	printf(usage_text, samples.help,
+	       range_text(&samples, samples_range, sizeof samples_range),
+	       samples_default,
+	       range_text(&scale, scale_range, sizeof scale_range),
+	       threads.help,
+	       range_text(&threads, threads_range, sizeof threads_range),
+	       threads_default);
 	fputs("\nmethods:\n", stdout);
 	for (int32_t m = 0; sss_method_name(m); m++) {
 		int col = printf("  %-17s", sss_method_name(m));
@@ -174,6 +221,16 @@ static int usage_error(const char *fmt, const char *what)
 	say(stderr, "", text);
 	fprintf(stderr, "Try 'sss --help'.\n");
 	return 2;
+}
+
+/* "--threads 'x' must be 0..256": what, then the field's range. */
+static int option_error(const char *what, const sss_field_info *f,
+                        const char *value)
+{
+	char fmt[128], range[48];
+	snprintf(fmt, sizeof fmt, "%s %s", what,
+	         range_text(f, range, sizeof range));
+	return usage_error(fmt, value);
 }
 
 static int lookup(const char *name, const char *const *names, int count)
@@ -683,6 +740,7 @@ static int parse_args(int argc, char **argv, args *a)
 	int c;
 	char *end;
 	long long n;
+	sss_field_info field;
 	while ((c = getopt_long(argc, argv, "o:s:f:m:r:l:c:t:qhV", longopts,
 	                        NULL)) != -1) {
 		switch (c) {
@@ -709,22 +767,31 @@ static int parse_args(int argc, char **argv, args *a)
 				return usage_error("unknown compression '%s'", optarg);
 			break;
 		case 'r':
+			field = option_field("radius_scale");
 			errno = 0;
 			a->radius_scale = strtod(optarg, &end);
 			if (*end || end == optarg || errno ||
 			    isspace((unsigned char)*optarg) ||
-			    !(a->radius_scale >= 0) || a->radius_scale > 1e30)
-				return usage_error("--radius-scale '%s' must be a number "
-				                   ">= 0", optarg);
+			    !(a->radius_scale >= field.lo) ||
+			    (field.lo_open && !(a->radius_scale > field.lo)) ||
+			    a->radius_scale > (field.hi < 1e30 ? field.hi : 1e30))
+				return option_error("--radius-scale '%s' must be a "
+				                    "number", &field, optarg);
 			break;
 		case 't':
-			if (parse_int(optarg, 0, 256, &n))
-				return usage_error("--threads '%s' must be 0..256", optarg);
+			field = option_field("threads");
+			if (parse_int(optarg, (long long)field.lo, (long long)field.hi,
+			              &n))
+				return option_error("--threads '%s' must be", &field,
+				                    optarg);
 			a->threads = (int)n;
 			break;
 		case 'N':
-			if (parse_int(optarg, 1, 4096, &n))
-				return usage_error("--samples '%s' must be 1..4096", optarg);
+			field = option_field("samples");
+			if (parse_int(optarg, (long long)field.lo, (long long)field.hi,
+			              &n))
+				return option_error("--samples '%s' must be", &field,
+				                    optarg);
 			a->samples = (int)n;
 			break;
 		case 'C':

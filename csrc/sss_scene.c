@@ -1,8 +1,10 @@
 /* sss_scene.c - the JSON scene description (docs/scene.md): camera, unit
  * scale, options and the material table, checked so that a loaded scene is
  * always accepted by sss_apply. */
+#include "sss_camera_fields.h"
 #include "sss_fields.h"
 #include "sss_internal.h"
+#include "sss_option_fields.h"
 
 #include <cJSON.h>
 
@@ -155,9 +157,12 @@ static void join_index(char *dst, const char *path, int i)
 /* ------------------------------------------------------------ fields
  *
  * Each JSON object is read through one table of its keys: the key, where
- * its value goes in the struct being filled and what it may hold. A new
- * field is one line in its table; a material's is one line of
- * SSS_MATERIAL_FIELDS (sss_fields.h). */
+ * its value goes in the struct being filled and what it may hold. The
+ * tables are made from the schemas, one line per field: a material's in
+ * SSS_MATERIAL_FIELDS (sss_fields.h), an option's in SSS_OPTION_FIELDS
+ * (sss_option_fields.h), a camera's in SSS_CAMERA_FIELDS
+ * (sss_camera_fields.h); only the keys a reader handles itself (clipping,
+ * a material's profile, ...) are written out here. */
 
 /* Allowed numbers: [lo, hi], lo excluded when lo_open. */
 typedef struct span {
@@ -165,12 +170,10 @@ typedef struct span {
 	int lo_open;
 } span;
 
-#define ANY {-DBL_MAX, DBL_MAX, 0}
 #define POSITIVE {0.0, DBL_MAX, 1}
 /* Float fields share sss_material_validate's upper bound. */
 #define POSITIVE_F {0.0, 1e30, 1}
 #define NONNEG_F {0.0, 1e30, 0}
-#define UNIT {0.0, 1.0, 0}
 
 enum field_type {
 	FIELD_F64,     /* double within range */
@@ -328,13 +331,6 @@ static sss_result get_enum(ctx *c, const cJSON *it, const char *path,
 	                  printable(it->valuestring, buf, sizeof buf), list);
 }
 
-static const name_value camera_types[] = {
-	{"PERSP", SSS_CAMERA_PERSPECTIVE}, {"ORTHO", SSS_CAMERA_ORTHOGRAPHIC},
-};
-static const name_value sensor_fits[] = {
-	{"AUTO", SSS_SENSOR_FIT_AUTO}, {"HORIZONTAL", SSS_SENSOR_FIT_HORIZONTAL},
-	{"VERTICAL", SSS_SENSOR_FIT_VERTICAL},
-};
 static const char *profile_name(int32_t kind)
 {
 	for (int i = 0; i < COUNT(sss__profile_names); i++)
@@ -401,24 +397,27 @@ static sss_result parse_fields(ctx *c, const char *path, const field *fields,
 
 /* ------------------------------------------------------------ camera */
 
-#define CAM(k, t, member) .key = k, .profile = -1, .type = t, \
-                          .offset = AT(sss_camera, member)
+/* The keys of "camera": clipping (read by parse_camera itself), then
+ * the camera schema's (sss_camera_fields.h) rows whose place is CAMERA. */
+#define ROW(...) ROW_(__VA_ARGS__)
+#define ROW_(k, member, t, place, when, def, lo_, hi_, lo_open, names_, \
+             count, help) \
+	IN_##place({.key = k, .profile = -1, .type = FIELD_##t, \
+	            .offset = AT(sss_camera, member), \
+	            .range = {lo_, hi_, lo_open}, .what = k, .names = names_, \
+	            .name_count = count},)
+#define IN_CAMERA(...) __VA_ARGS__
+#define IN_TOP(...)
 static const field camera_fields[] = {
-	{CAM("type", FIELD_ENUM, type), ENUM(camera_types, "camera type")},
-	{CAM("lens", FIELD_F64, lens_mm), .range = POSITIVE},
-	{CAM("sensor_width", FIELD_F64, sensor_width_mm), .range = POSITIVE},
-	{CAM("sensor_height", FIELD_F64, sensor_height_mm), .range = POSITIVE},
-	{CAM("sensor_fit", FIELD_ENUM, sensor_fit),
-	 ENUM(sensor_fits, "sensor fit")},
-	{CAM("shift_x", FIELD_F64, shift_x), .range = ANY},
-	{CAM("shift_y", FIELD_F64, shift_y), .range = ANY},
-	{CAM("ortho_scale", FIELD_F64, ortho_scale), .range = POSITIVE},
 	{.key = "clip_start", .type = FIELD_SPECIAL},
 	{.key = "clip_end", .type = FIELD_SPECIAL},
-	{CAM("pixel_aspect_x", FIELD_F64, pixel_aspect_x), .range = POSITIVE},
-	{CAM("pixel_aspect_y", FIELD_F64, pixel_aspect_y), .range = POSITIVE},
+	SSS_CAMERA_FIELDS(ROW)
 };
-enum { C_CLIP_START = 8, C_CLIP_END = 9, C_COUNT = COUNT(camera_fields) };
+#undef ROW
+#undef ROW_
+#undef IN_CAMERA
+#undef IN_TOP
+enum { C_CLIP_START, C_CLIP_END, C_COUNT = COUNT(camera_fields) };
 
 static sss_result parse_camera(ctx *c, const cJSON *obj, sss_camera *cam)
 {
@@ -644,27 +643,43 @@ done:
 
 /* ------------------------------------------------------------ scene */
 
-#define TOP(k, t, member) .key = k, .profile = -1, .type = t, \
-                          .offset = AT(sss_scene, member)
+/* The top level's keys: the three read by parse_root itself, the camera
+ * schema's rows whose place is TOP (unit_scale), then the options schema
+ * (sss_option_fields.h), with its ranges, which are sss_apply's. */
+#define ROW(...) ROW_(__VA_ARGS__)
+#define ROW_(k, member, t, place, when, def, lo_, hi_, lo_open, names_, \
+             count, help) \
+	IN_##place({.key = k, .profile = -1, .type = FIELD_##t, \
+	            .offset = AT(sss_scene, camera.member), \
+	            .range = {lo_, hi_, lo_open}},)
+#define IN_CAMERA(...)
+#define IN_TOP(...) __VA_ARGS__
+#define OPTION(k, member, t, def, lo_, hi_, lo_open, help) \
+	{.key = k, .profile = -1, .type = FIELD_##t, \
+	 .offset = AT(sss_scene, options.member), \
+	 .range = {lo_, hi_, lo_open}, .lo = INT_##t(lo_), .hi = INT_##t(hi_)},
+/* An INT row's bounds; other types have none. */
+#define INT_INT(v) (int32_t)(v)
+#define INT_F32(v) 0
+#define INT_F64(v) 0
+#define INT_METHOD(v) 0
 static const field top_fields[] = {
 	{.key = "version", .type = FIELD_SPECIAL},
 	{.key = "camera", .type = FIELD_SPECIAL},
-	{TOP("unit_scale", FIELD_F64, camera.unit_scale), .range = POSITIVE},
-	/* Bounds as sss_apply checks them. */
-	{TOP("method", FIELD_METHOD, options.method)},
-	{TOP("radius_scale", FIELD_F32, options.radius_scale),
-	 .range = NONNEG_F},
-	{TOP("taps", FIELD_INT, options.taps), .lo = 1, .hi = 4097},
-	{TOP("threads", FIELD_INT, options.num_threads), .lo = 0, .hi = 256},
-	{TOP("background_depth", FIELD_F64, options.background_depth),
-	 .range = POSITIVE},
-	{TOP("max_support_px", FIELD_INT, options.max_support_px), .lo = 1,
-	 .hi = INT32_MAX},
 	{.key = "materials", .type = FIELD_SPECIAL},
-	{TOP("samples", FIELD_INT, options.samples), .lo = 1, .hi = 4096},
-	{TOP("crease", FIELD_INT, options.crease), .lo = 0, .hi = 1},
+	SSS_CAMERA_FIELDS(ROW)
+	SSS_OPTION_FIELDS(OPTION)
 };
-enum { T_VERSION, T_CAMERA, T_MATERIALS = 9, T_COUNT = COUNT(top_fields) };
+#undef ROW
+#undef ROW_
+#undef IN_CAMERA
+#undef IN_TOP
+#undef OPTION
+#undef INT_INT
+#undef INT_F32
+#undef INT_F64
+#undef INT_METHOD
+enum { T_VERSION, T_CAMERA, T_MATERIALS, T_COUNT = COUNT(top_fields) };
 
 static sss_result parse_root(ctx *c, const cJSON *root, sss_scene *sc)
 {

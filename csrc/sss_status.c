@@ -1,5 +1,7 @@
 /* sss_status.c - status names and messages, version, struct defaults. */
+#include "sss_camera_fields.h"
 #include "sss_internal.h"
+#include "sss_option_fields.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -69,39 +71,57 @@ sss_result sss__fail(char *errbuf, size_t errbuf_len, sss_result code,
 	return code;
 }
 
+int sss__in_range(double v, double lo, double hi, int lo_open)
+{
+	if (!(v >= lo) || (lo_open && !(v > lo)))
+		return 0;
+	if (hi == INFINITY)
+		return 1;
+	return hi >= SSS__BIG ? isfinite(v) : v <= hi;
+}
+
+const char *sss__range_text(double lo, double hi, int lo_open, int integer,
+                            char *buf, size_t len)
+{
+	const char *op = lo_open ? ">" : ">=";
+	if (integer && hi >= INT32_MAX)
+		snprintf(buf, len, "%s %.0f", op, lo);
+	else if (integer)
+		snprintf(buf, len, "%.0f..%.0f", lo, hi);
+	else if (lo <= -SSS__BIG && hi >= SSS__BIG)
+		snprintf(buf, len, "finite");
+	else if (hi == INFINITY)
+		snprintf(buf, len, "%s %g", op, lo);
+	else if (hi >= SSS__BIG)
+		snprintf(buf, len, "finite and %s %g", op, lo);
+	else
+		snprintf(buf, len, "in %c%g, %g]", lo_open ? '(' : '[', lo, hi);
+	return buf;
+}
+
+/* Each member's default from its schema row (sss_option_fields.h,
+ * sss_camera_fields.h). */
+#define DEFAULT(key, member, type, def, ...) opt->member = (def);
 void sss_options_default(sss_options *opt)
 {
 	if (!opt)
 		return;
 	memset(opt, 0, sizeof *opt);
 	opt->struct_size = sizeof *opt;
-	opt->method = SSS_METHOD_AUTO;
-	opt->radius_scale = 1.0f;
-	opt->taps = SSS_DEFAULT_TAPS;
-	opt->num_threads = 0;
-	opt->background_depth = 1e9;
-	opt->max_support_px = 256;
-	opt->samples = 64;
-	opt->crease = 1;
+	SSS_OPTION_FIELDS(DEFAULT)
 }
+#undef DEFAULT
 
+#define DEFAULT(key, member, type, place, when, def, ...) cam->member = (def);
 void sss_camera_default(sss_camera *cam)
 {
 	if (!cam)
 		return;
-	/* Blender's default camera: 50 mm lens on a 36 mm sensor. */
 	memset(cam, 0, sizeof *cam);
 	cam->struct_size = sizeof *cam;
-	cam->type = SSS_CAMERA_PERSPECTIVE;
-	cam->lens_mm = 50.0;
-	cam->sensor_width_mm = 36.0;
-	cam->sensor_height_mm = 24.0;
-	cam->sensor_fit = SSS_SENSOR_FIT_AUTO;
-	cam->ortho_scale = 6.0;
-	cam->pixel_aspect_x = 1.0;
-	cam->pixel_aspect_y = 1.0;
-	cam->unit_scale = 1.0;
+	SSS_CAMERA_FIELDS(DEFAULT)
 }
+#undef DEFAULT
 
 size_t sss_struct_size(const char *name)
 {

@@ -176,19 +176,25 @@ static void test_apply_arguments(void)
 	BAD_APPLY("apply-9", SSS_ERR_INVALID_ARGUMENT, mat.strength = NAN,
 	          mat.strength = 1.0f, "strength");
 	BAD_APPLY("apply-10", SSS_ERR_INVALID_ARGUMENT, opt.radius_scale = -1,
-	          opt.radius_scale = 1, "radius_scale");
+	          opt.radius_scale = 1,
+	          "options: radius_scale -1 must be finite and >= 0");
 	BAD_APPLY("apply-11", SSS_ERR_INVALID_ARGUMENT, opt.taps = 0,
-	          opt.taps = 33, "taps");
+	          opt.taps = 33, "options: taps 0 must be 1..4097");
 	BAD_APPLY("apply-12", SSS_ERR_INVALID_ARGUMENT, opt.samples = 0,
-	          opt.samples = 64, "samples");
+	          opt.samples = 64,
+	          "options: samples 0 must be 1..4096");
 	BAD_APPLY("apply-12b", SSS_ERR_INVALID_ARGUMENT, opt.crease = 2,
-	          opt.crease = 1, "crease");
+	          opt.crease = 1, "options: crease 2 must be 0..1");
 	BAD_APPLY("apply-13", SSS_ERR_INVALID_ARGUMENT, opt.method = 17,
-	          opt.method = 0, "method");
+	          opt.method = 0,
+	          "options: unknown method 17 (expected 0..4)");
 	BAD_APPLY("apply-14", SSS_ERR_INVALID_ARGUMENT, cam.lens_mm = 0,
-	          cam.lens_mm = 50, "lens_mm");
+	          cam.lens_mm = 50,
+	          "camera: lens_mm = 0 is out of range (must be finite and > 0)");
 	BAD_APPLY("apply-15", SSS_ERR_INVALID_ARGUMENT, cam.unit_scale = NAN,
-	          cam.unit_scale = 1, "unit_scale");
+	          cam.unit_scale = 1,
+	          "camera: unit_scale = nan is out of range (must be finite "
+	          "and > 0)");
 	BAD_APPLY("apply-16", SSS_ERR_INVALID_ARGUMENT, out.data = s->diff_dir,
 	          out.data = buf, "overlaps");
 	BAD_APPLY("apply-17", SSS_ERR_SIZE_MISMATCH, out.height = 5,
@@ -196,7 +202,8 @@ static void test_apply_arguments(void)
 	BAD_APPLY("apply-18", SSS_ERR_INVALID_ARGUMENT, opt.struct_size = 1,
 	          opt.struct_size = sizeof opt, "struct_size");
 	BAD_APPLY("apply-19", SSS_ERR_INVALID_ARGUMENT, opt.num_threads = -1,
-	          opt.num_threads = 0, "num_threads");
+	          opt.num_threads = 0,
+	          "options: num_threads -1 must be 0..256");
 	BAD_APPLY("apply-20", SSS_ERR_INVALID_ARGUMENT,
 	          opt.background_depth = NAN, opt.background_depth = 1e9,
 	          "background_depth");
@@ -219,6 +226,37 @@ static void test_apply_arguments(void)
 	CHECK_STATUS("apply-empty-table", SSS_OK,
 	             sss_apply(&p, &cam, NULL, 0, &opt, &out, NULL, err,
 	                       sizeof err));
+	BAD_APPLY("apply-21", SSS_ERR_INVALID_ARGUMENT, opt.max_support_px = 0,
+	          opt.max_support_px = 256,
+	          "options: max_support_px 0 must be >= 1");
+	BAD_APPLY("apply-22", SSS_ERR_INVALID_ARGUMENT, cam.type = 2,
+	          cam.type = SSS_CAMERA_PERSPECTIVE,
+	          "camera: unknown type 2 (expected 0, 1)");
+	BAD_APPLY("apply-23", SSS_ERR_INVALID_ARGUMENT, cam.shift_x = INFINITY,
+	          cam.shift_x = 0, "camera: shift_x = inf is out of range "
+	          "(must be finite)");
+	/* What the options and the camera accepted before their checks were
+	 * made from their tables, they still accept: an infinite background
+	 * depth, any finite radius scale, the lengths a camera type does not
+	 * read. */
+	opt.background_depth = INFINITY;
+	opt.radius_scale = 1e35f;
+	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam.lens_mm = 0;
+	CHECK_STATUS("apply-still-accepted", SSS_OK,
+	             sss_apply(&p, &cam, &mat, 1, &opt, &out, NULL, err,
+	                       sizeof err));
+	sss_options_default(&opt);
+	sss_camera_default(&cam);
+	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam.ortho_scale = -1;
+	err[0] = 0;
+	CHECK_STATUS("apply-ortho-scale", SSS_ERR_INVALID_ARGUMENT,
+	             sss_apply(&p, &cam, &mat, 1, &opt, &out, NULL, err,
+	                       sizeof err));
+	CHECK("apply-ortho-scale.msg", strstr(err, "ortho_scale") != NULL,
+	      "message '%s'", err);
+	sss_camera_default(&cam);
 	/* A stride near 2^60 overflowed the image's span (UBSan), no status. */
 	BAD_APPLY("apply-stride-huge", SSS_ERR_INVALID_ARGUMENT,
 	          out.row_stride = (int64_t)1 << 60, out.row_stride = 0,

@@ -149,6 +149,8 @@ static void test_retune(void)
 	CHECK_STATUS("frame.bad-scale", SSS_ERR_INVALID_ARGUMENT,
 	             sss_frame_scatter(frame, scene, &opt, &oc, NULL, NULL, err,
 	                               sizeof err));
+	CHECK("frame.bad-scale-says", strstr(err, "radius scale -1 must be "
+	      "finite and >= 0") != NULL, "%s", err);
 	opt.radius_scale = 1.0f;
 	opt.struct_size = 3;
 	CHECK_STATUS("frame.bad-struct", SSS_ERR_INVALID_ARGUMENT,

@@ -1,6 +1,7 @@
 /* test_scene.c - the JSON scene description: exact structs from a full
  * scene, defaults, every error with its key path, warnings, files, and a
  * loaded scene that sss_apply accepts. */
+#include "sss_camera_fields.h"
 #include "synth.h"
 #include "test_util.h"
 
@@ -340,10 +341,11 @@ static const struct {
 	{"err-method", "{\"method\": \"fast\"}",
 	 SSS_ERR_INVALID_ARGUMENT, "method: unknown method 'fast'"},
 	{"err-camera-type", "{\"camera\": {\"type\": \"PANO\"}}",
-	 SSS_ERR_INVALID_ARGUMENT, "camera.type: unknown camera type 'PANO' "
+	 SSS_ERR_INVALID_ARGUMENT, "camera.type: unknown type 'PANO' "
 	 "(expected PERSP, ORTHO)"},
 	{"err-sensor-fit", "{\"camera\": {\"sensor_fit\": \"auto\"}}",
-	 SSS_ERR_INVALID_ARGUMENT, "camera.sensor_fit: unknown sensor fit"},
+	 SSS_ERR_INVALID_ARGUMENT, "camera.sensor_fit: unknown sensor_fit "
+	 "'auto' (expected AUTO, HORIZONTAL, VERTICAL)"},
 	{"err-radius-neg", "{\"materials\": [{\"pass_index\": 1, \"profile\": "
 	 "\"burley\", \"radius\": [0.004, -0.001, 0.001]}]}",
 	 SSS_ERR_INVALID_ARGUMENT, "materials[0].radius[1]: -0.001 is out of "
@@ -909,6 +911,171 @@ static void test_doc_table(void)
 	      !sss_profile_name(-1), "a profile past the end");
 }
 
+/* A row's cells in a section of docs/scene.md: | key | type | unit |
+ * default | range | sets |, each checked to start as given (the unit and
+ * the prose after are the document's own). */
+static void check_doc_row(const char *section, const char *key,
+                          const char *type, const char *def,
+                          const char *range, const char *sets)
+{
+	char head[96];
+	snprintf(head, sizeof head, "\n| `%s` | ", key);
+	const char *row = strstr(section, head);
+	const char *end = strstr(section + 1, "\n### ");
+	CHECK(key, row != NULL && (!end || row < end), "docs/scene.md has no "
+	      "row for '%s' in its section", key);
+	if (!row || (end && row > end))
+		return;
+	const char *cell[6];
+	const char *p = row + 1;
+	int k = 0;
+	while (k < 6 && (p = strstr(p, "| ")) != NULL) {
+		cell[k++] = p + 2;
+		p += 2;
+	}
+	CHECK(key, k == 6, "row of '%s' has fewer than 6 cells", key);
+	if (k < 6)
+		return;
+	CHECK(key, starts(cell[1], type), "type should read '%s'", type);
+	CHECK(key, starts(cell[3], def), "default should read '%s'", def);
+	CHECK(key, starts(cell[4], range), "range should read '%s'", range);
+	CHECK(key, starts(cell[5], sets), "sets should start with %s", sets);
+}
+
+/* %g as the document writes it: 1e9, not 1e+09. */
+static void doc_number(char *buf, size_t len, double v)
+{
+	char g[32];
+	snprintf(g, sizeof g, "%g", v);
+	char *e = strstr(g, "e+");
+	if (e) {
+		char *digits = e + 2;
+		while (*digits == '0' && digits[1])
+			digits++;
+		memmove(e + 1, digits, strlen(digits) + 1);
+	}
+	snprintf(buf, len, "%s", g);
+}
+
+/* A number's range as the document writes it. */
+static void doc_range(char *buf, size_t len, double lo, double hi,
+                      int lo_open, int integer)
+{
+	char a[32], b[32];
+	doc_number(a, sizeof a, lo);
+	doc_number(b, sizeof b, hi);
+	if (integer && hi < INT32_MAX)
+		snprintf(buf, len, "%s .. %s", a, b);
+	else if (!integer && lo <= -1e30 && hi >= 1e30)
+		snprintf(buf, len, "finite");
+	else if (integer || hi >= 1e30)
+		snprintf(buf, len, "%s %s", lo_open ? ">" : ">=", a);
+	else
+		snprintf(buf, len, "%s .. %s", a, b);
+}
+
+static const char *doc_section(const char *doc, const char *title)
+{
+	const char *section = strstr(doc, title);
+	CHECK(title, section != NULL, "docs/scene.md has no section %s", title);
+	return section;
+}
+
+/* One row of the camera's schema against the document. */
+static void camera_row(const char *section, const char *key,
+                       const char *member, int type, int top, double def,
+                       double lo, double hi, int lo_open,
+                       const sss__name_value *names, int count)
+{
+	char cdef[64] = "", range[256] = "", sets[96];
+	if (type == SSS_FIELD_ENUM) {
+		for (int j = 0; j < count; j++) {
+			size_t used = strlen(range);
+			snprintf(range + used, sizeof range - used, "%s`\"%s\"`",
+			         j ? ", " : "", names[j].name);
+			if (names[j].value == (int32_t)def)
+				snprintf(cdef, sizeof cdef, "`\"%s\"`", names[j].name);
+		}
+	} else {
+		doc_number(cdef, sizeof cdef, def);
+		doc_range(range, sizeof range, lo, hi, lo_open, 0);
+	}
+	snprintf(sets, sizeof sets, "`%s%s`", top ? "sss_camera." : "", member);
+	check_doc_row(section, key, type == SSS_FIELD_ENUM ? "string" : "number",
+	              cdef, range, sets);
+}
+
+/* docs/scene.md's top-level table against the options' schema
+ * (sss_option_field) and its camera table against the camera's
+ * (sss_camera_fields.h, whose TOP rows are top-level keys). */
+static void test_doc_options_camera(void)
+{
+	FILE *fp = fopen("docs/scene.md", "rb");
+	if (!fp)
+		return; /* test_doc_table said so */
+	static char doc[1 << 17];
+	size_t n = fread(doc, 1, sizeof doc - 1, fp);
+	fclose(fp);
+	doc[n] = '\0';
+	const char *top = doc_section(doc, "\n### Top level");
+	const char *camera = doc_section(doc, "\n### `camera`");
+	if (!top || !camera)
+		return;
+	sss_field_info f;
+	int32_t i = 0;
+	for (; sss_option_field(i, &f) == SSS_OK; i++) {
+		char def[64], range[256] = "", sets[96];
+		const char *type = f.type == SSS_FIELD_INT ? "integer"
+		                   : f.type == SSS_FIELD_ENUM ? "string" : "number";
+		if (f.type == SSS_FIELD_ENUM) {
+			snprintf(def, sizeof def, "`\"%s\"`",
+			         sss_method_name((int32_t)f.default_value[0]));
+			for (int32_t j = 0; j < f.name_count; j++) {
+				size_t used = strlen(range);
+				snprintf(range + used, sizeof range - used, "%s`\"%s\"`",
+				         j ? ", " : "", sss_method_name(j));
+			}
+			CHECK(f.key, f.lo == 0 && f.hi == f.name_count - 1 &&
+			      !sss_method_name(f.name_count), "the methods' values");
+		} else {
+			doc_number(def, sizeof def, f.default_value[0]);
+			doc_range(range, sizeof range, f.lo, f.hi, f.lo_open,
+			          f.type == SSS_FIELD_INT);
+		}
+		snprintf(sets, sizeof sets, "`sss_options.%s`", f.member);
+		check_doc_row(top, f.key, type, def, range, sets);
+	}
+	/* Every member, and sss_options_default's values. */
+	CHECK("option-count", i == 8, "%d option fields", (int)i);
+	sss_options d;
+	sss_options_default(&d);
+	CHECK("option-defaults", sss_option_field(2, &f) == SSS_OK &&
+	      strcmp(f.key, "taps") == 0 && f.default_value[0] == d.taps &&
+	      sss_option_field(4, &f) == SSS_OK && f.default_value[0] ==
+	      d.background_depth && f.type == SSS_FIELD_DOUBLE,
+	      "taps and background_depth");
+	CHECK_STATUS("option-past-end", SSS_ERR_INVALID_ARGUMENT,
+	             sss_option_field(i, &f));
+	CHECK_STATUS("option-null", SSS_ERR_INVALID_ARGUMENT,
+	             sss_option_field(0, NULL));
+
+#define CAMERA_ROW(key, member, type, place, when, def, lo, hi, lo_open, \
+                   names, count, help) \
+	camera_row(place == SSS__PLACE_TOP ? top : camera, key, #member, \
+	           SSS_FIELD_##type, place == SSS__PLACE_TOP, def, lo, hi, \
+	           lo_open, names, count);
+#define SSS_FIELD_F64 SSS_FIELD_DOUBLE
+#define CAMERA SSS__PLACE_CAMERA
+#define TOP SSS__PLACE_TOP
+#define ROW(...) CAMERA_ROW(__VA_ARGS__)
+	SSS_CAMERA_FIELDS(ROW)
+#undef ROW
+#undef TOP
+#undef CAMERA
+#undef SSS_FIELD_F64
+#undef CAMERA_ROW
+}
+
 int main(void)
 {
 	test_full_scene();
@@ -920,5 +1087,6 @@ int main(void)
 	test_files();
 	test_apply_accepts();
 	test_doc_table();
+	test_doc_options_camera();
 	return tu_finish("test_scene");
 }

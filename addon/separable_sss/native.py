@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 12  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 13  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -190,6 +190,7 @@ def _declare(lib):
                                            c.POINTER(FieldInfo)]),
         "sss_material_field_name": (c.c_char_p, [c.c_int32, c.c_int32,
                                                  c.POINTER(c.c_int32)]),
+        "sss_option_field": (c.c_int32, [c.c_int32, c.POINTER(FieldInfo)]),
         "sss_method_summary": (c.c_char_p, [c.c_int32]),
         "sss_profile_name": (c.c_char_p, [c.c_int32]),
         "sss_process_options_default": (None,
@@ -319,7 +320,30 @@ def render_passes():
     return out
 
 
-FIELD_TYPES = ("float", "rgb", "int", "enum")  # sss_field_type's order
+FIELD_TYPES = ("float", "rgb", "int", "enum", "double")  # sss_field_type's
+
+
+def _check_field_info(lib):
+    if lib.sss_struct_size(b"sss_field_info") != ctypes.sizeof(FieldInfo):
+        raise LibraryError(-1, "ABI", "sss_field_info layout differs from "
+                           "the add-on's")
+
+
+def option_fields():
+    """{key: dict} of the library's options schema (sss_option_field, the
+    scene description's top-level keys, docs/scene.md): member, type
+    (FIELD_TYPES; the method is an "enum" named by methods()), default,
+    lo, hi, lo_open and help."""
+    lib = library()
+    _check_field_info(lib)
+    out, info, i = {}, FieldInfo(), 0
+    while lib.sss_option_field(i, ctypes.byref(info)) == 0:
+        out[info.key.decode()] = {
+            "member": info.member.decode(), "type": FIELD_TYPES[info.type],
+            "default": info.default_value[0], "lo": info.lo, "hi": info.hi,
+            "lo_open": bool(info.lo_open), "help": info.help.decode()}
+        i += 1
+    return out
 
 
 def material_fields():
@@ -328,9 +352,7 @@ def material_fields():
     transmits, default (a number, or a list of 3 for "rgb"), lo, hi,
     lo_open, names (enum: [(name, value)]) and help."""
     lib = library()
-    if lib.sss_struct_size(b"sss_field_info") != ctypes.sizeof(FieldInfo):
-        raise LibraryError(-1, "ABI", "sss_field_info layout differs from "
-                           "the add-on's")
+    _check_field_info(lib)
     out, info, i = {}, FieldInfo(), 0
     while lib.sss_material_field(i, ctypes.byref(info)) == 0:
         kind = FIELD_TYPES[info.type]

@@ -211,11 +211,6 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
     # Stored as the method's value in the library (0 = auto, the first
     # item and so the default).
     method: EnumProperty(name="Method", items=method_items)
-    taps: IntProperty(
-        name="Taps", min=1, max=4097, default=33,
-        description="Samples per 1-D pass of the separable methods on "
-        "blurs wider than 64 pixels (narrower ones read every pixel): "
-        "more is smoother on wide blurs and slower")
     output_dir: StringProperty(
         name="Output Folder", subtype="DIR_PATH", default="",
         description="Where passes and results go (empty: a temporary "
@@ -243,10 +238,23 @@ class SSSSceneSettings(bpy.types.PropertyGroup):
                                 default="")
 
 
+def scene_properties():
+    """{property name: bpy property} of the scene settings that are one
+    of the library's options (sss_option_field): Taps, with the option's
+    range and default."""
+    taps = native.option_fields()["taps"]
+    return {"taps": IntProperty(
+        name="Taps", min=int(taps["lo"]), max=int(taps["hi"]),
+        default=int(taps["default"]),
+        description="Samples per 1-D pass of the separable methods on "
+        "blurs wider than 64 pixels (narrower ones read every pixel): "
+        "more is smoother on wide blurs and slower")}
+
+
 classes = (SSSMaterialSettings, SSSSceneSettings)
 
-# Why the material settings lack the library's fields (None: they have
-# them); set by register().
+# Why the material settings lack the library's fields and the scene's
+# its options (None: they have them); set by register().
 library_error = None
 
 # The scene settings a live re-tune follows (live.py); it follows every
@@ -270,12 +278,13 @@ def register():
     # material settings are the add-on's own only, and the panels say why.
     global library_error
     try:
-        fields = field_properties()
+        fields, scene_fields = field_properties(), scene_properties()
         library_error = None
     except native.LibraryError as e:
-        fields, library_error = {}, str(e)
+        fields, scene_fields, library_error = {}, {}, str(e)
     for name, (_member, prop) in fields.items():
         SSSMaterialSettings.__annotations__[name] = prop
+    SSSSceneSettings.__annotations__.update(scene_fields)
     _follow(SSSMaterialSettings)
     _follow(SSSSceneSettings, _SCENE_RETUNE)
     for cls in classes:

@@ -177,8 +177,7 @@ def draw_material_advanced(layout, context, mat, split=True):
             sub.active = s.mapping != 'CYCLES' and s.mapping != 'EEVEE'
             sub.prop(s, "albedo")
         _prop(col, s, "match_energy", split)
-    scene_taps = scene.sss.taps if getattr(scene, "sss", None) else 33
-    _auto(col, s, "taps", split, "%d (scene's)" % scene_taps)
+    _auto(col, s, "taps", split, "%d (scene's)" % scene.sss.taps)
     row = col.row(align=True)
     row.prop(mat, "pass_index")
     if mat.pass_index == 0:
@@ -423,7 +422,8 @@ class SSS_PT_node_advanced(_SidebarPanel, bpy.types.Panel):
         scene = context.scene
         s = scene.sss
         col = layout.column()
-        col.prop(s, "taps")
+        if not _no_fields(col, context):
+            col.prop(s, "taps")
         _prop(col, s, "output_dir", False)
         if not s.output_dir:
             _wrapped(col, context, "Empty: " + pipeline.output_path(scene))

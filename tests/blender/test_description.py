@@ -136,6 +136,27 @@ def test_material_properties_are_made_from_the_librarys_schema():
         | {description.identifier(n) for n in native.profiles()}
 
 
+def test_scene_settings_are_the_librarys_options(scene):
+    """The scene's Taps is the library's taps option (sss_option_field):
+    its range and default; and every top-level key the description writes
+    but the camera's is one of the library's options."""
+    options = native.option_fields()
+    taps = options["taps"]
+    prop = properties.SSSSceneSettings.bl_rna.properties["taps"]
+    assert taps["type"] == "int" and taps["member"] == "taps"
+    assert (prop.hard_min, prop.hard_max, prop.default) == (
+        int(taps["lo"]), int(taps["hi"]), int(taps["default"]))
+    assert prop.hard_min >= 1 and prop.hard_max > 33
+    found = analysis.analyse(scene)
+    data = description.scene_description(scene, found)
+    written = set(data) - {"version", "camera", "unit_scale", "materials"}
+    assert written and written <= set(options), written
+    scene.sss.taps = prop.hard_max
+    assert description.scene_description(scene, found)["taps"] == \
+        prop.hard_max
+    scene.sss.taps = int(taps["default"])
+
+
 def test_material_entries_are_the_schemas_fields(scene):
     """The description's material entry has a key for every field of the
     schema its profile reads (transmission's only while it transmits),

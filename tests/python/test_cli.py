@@ -198,3 +198,52 @@ def test_usage(sss_cmd, tmp_path):
         "--radius-scale", "-1", check=2)
     run(sss_cmd, "a.exr", "-o", "b.exr", "--scene", "s.json",
         "--method", "magic", check=2)
+
+
+def option_rows():
+    """{key: (lo, hi, default, help)} of the bounded integer rows of the
+    library's options schema, read from its table
+    (csrc/sss_option_fields.h; the library itself is not loaded here, as
+    under make check it is built with the sanitizers)."""
+    text = open(os.path.join(os.path.dirname(__file__), "..", "..", "csrc",
+                             "sss_option_fields.h")).read()
+    text = re.sub(r"\s*\\\n\s*", " ", text)
+    rows = {}
+    for key, kind, default, lo, hi, help_text in re.findall(
+            r'X\("(\w+)", \w+, (\w+), (\w+), (\w+), (\w+), \d,\s*"([^"]*)"\)',
+            text):
+        if kind == "INT" and (lo + hi + default).isdigit():
+            rows[key] = (int(lo), int(hi), int(default), help_text)
+    return rows
+
+
+@pytest.mark.parametrize("option,key", [("--threads", "threads"),
+                                        ("--samples", "samples")])
+def test_option_ranges_are_the_librarys(sss_cmd, tmp_path, option, key):
+    """The command's --threads and --samples take the library's option's
+    range (sss_option_field): its help and its messages say it, its
+    bounds are accepted and one past them refused."""
+    lo, hi, default, help_line = option_rows()[key]
+    span = f"{lo}..{hi}"
+    help_text = run(sss_cmd, "--help", check=0).stdout
+    assert f"{help_line}, {span}" in help_text
+    assert f"else {default})" in help_text
+    base = ("missing.exr", "-o", tmp_path / "o.exr", "--scene",
+            tmp_path / "missing.json")
+    for bad in (lo - 1, hi + 1):
+        proc = run(sss_cmd, *base, option, bad, check=2)
+        assert f"{option} '{bad}' must be {span}" in proc.stderr
+    for good in (lo, hi):
+        proc = run(sss_cmd, *base, option, good)
+        assert option not in proc.stderr and "missing.json" in proc.stderr
+
+
+def test_radius_scale_range_is_the_librarys(sss_cmd, tmp_path):
+    assert 'X("radius_scale", radius_scale, F32, 1.0, 0, SSS__BIG, 0,' in \
+        re.sub(r"\s*\\\n\s*", " ", open(os.path.join(
+            os.path.dirname(__file__), "..", "..", "csrc",
+            "sss_option_fields.h")).read())
+    assert "by F >= 0 " in run(sss_cmd, "--help", check=0).stdout
+    proc = run(sss_cmd, "missing.exr", "-o", tmp_path / "o.exr", "--scene",
+               tmp_path / "s.json", "--radius-scale", "-0.5", check=2)
+    assert "--radius-scale '-0.5' must be a number >= 0" in proc.stderr
