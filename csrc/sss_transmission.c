@@ -15,10 +15,11 @@
  *  - burley: for a Burley profile, the share of the light entering the
  *    back face of a slab of thickness t that leaves by the front, from
  *    steady-state 1-D diffusion in the slab with the medium Cycles' random
- *    walk itself uses (see slab_make below). For a sum of 2-D Gaussians
- *    sum w_i G(v_i) (d'Eon, Jimenez, near/far profiles: no medium behind
- *    them) the profile's own mass beyond a plane at distance t,
- *    sum w_i e^{-t^2 / 2 v_i} (Golubev 2018, UE4, HDRP).
+ *    walk itself uses (see slab_make below); for Blender 4.x's Random
+ *    Walk (Skin) that walk's own, measured (walk4_make below). For a sum
+ *    of 2-D Gaussians sum w_i G(v_i) (d'Eon, Jimenez, near/far profiles:
+ *    no medium behind them) the profile's own mass beyond a plane at
+ *    distance t, sum w_i e^{-t^2 / 2 v_i} (Golubev 2018, UE4, HDRP).
  *  - jimenez: Jimenez et al. 2010 (SeparableSSS.h SSSSTransmittance):
  *    d'Eon's skin sum w_i e^{-s^2 / v_i} with s = t 8.25 (1 - translucency)
  *    / sssWidth (sssWidth = the material's jimenez_width).
