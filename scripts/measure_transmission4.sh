@@ -19,19 +19,19 @@ mkdir -p "$out"
 "$blender" -b --factory-startup --python-exit-code 1 \
 	--python "$root/blender_scripts/build_scene.py" -- --kind slab \
 	--out "$out/slab.blend" >"$out/build.log" 2>&1
-# set  albedo R,G,B  Subsurface  mean free path (m)  t / l
+# name  albedo R,G,B  Subsurface  mean free path (m)  t / l
 run() {
-	set=$1 albedo=$2 sub=$3 l=$4
+	name=$1 albedo=$2 sub=$3 l=$4
 	shift 4
 	ts=$(for x in "$@"; do echo "$x $l"; done |
 		awk '{printf "%s%.6g", (NR > 1 ? "," : ""), $1 * $2}')
 	SSS_LIB=$root/build/libsss.so "$blender" -b --factory-startup \
 		--python-exit-code 1 \
 		--python "$root/blender_scripts/measure_transmission.py" -- \
-		--scene "$out/slab.blend" --out "$out/$set" --slab-sweep "$ts" \
+		--scene "$out/slab.blend" --out "$out/$name" --slab-sweep "$ts" \
 		--slab-subsurface "$sub" --slab-albedo "$albedo" \
 		--resolution "$res" --rw-samples "$spp" --samples 128 \
-		>"$out/$set.log" 2>&1 || { tail -n 30 "$out/$set.log"; exit 1; }
+		>"$out/$name.log" 2>&1 || { tail -n 30 "$out/$name.log"; exit 1; }
 }
 low="0.25 0.5 1 1.5 2 3 4 5.5 7.5 10 14"
 run a 0.4,0.2,0.05 0.02 0.0072 $low
