@@ -110,7 +110,10 @@ def slab_sweep(args):
     each side left out, so the sides play no part), per channel and as
     luminance. Materials with the slab model get their attenuation in the
     back-light layer's light itself (transmission.py), so the thickness
-    pass reads 0 there."""
+    pass reads 0 there. Each row also has the material as the library
+    read it and the library's transmittance at the slab's thickness
+    (t_library): the walk's, in the library's terms, is t_rw / t_model x
+    t_library (scripts/fit_transmission4.py)."""
     from separable_sss import native, pipeline, transmission
     from separable_sss.switch_off import switched_off
     import ctypes  # noqa: F401
@@ -182,7 +185,10 @@ def slab_sweep(args):
                 0.0))[m].mean()
             bd = (b * dc)[m].mean(0)
             r = ref[m].mean(0)
+            entry = desc["materials"][0]  # the slab's, as the library reads it
             row = dict(thickness=thick, subsurface=sub,
+                       material=entry,
+                       t_library=native.transmittance(entry, thick),
                        measured_thickness=float(t_meas),
                        rw=r.tolist(), off=means[False].tolist(),
                        model=means[True].tolist(),

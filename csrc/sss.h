@@ -438,7 +438,13 @@ SSS_API sss_result sss_kernel_1d(const sss_material *mat,
 /* The transmittance factor of a material (what multiplies the back light;
  * strength and colour included) at a thickness in metres, with N . V =
  * facing (the fast model's view term; others ignore it), radius_scale 1.
- * Thickness NaN or negative gives 0; +Inf gives the thick limit. */
+ * Thickness NaN or negative gives 0; +Inf gives the thick limit. At most
+ * strength x colour, except for Blender 4.x's Random Walk (Skin) (a
+ * Burley profile with SSS_BURLEY_CYCLES_RANDOM_WALK and
+ * SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN), whose measured walk lets
+ * more than the albedo through thin parts: there at most strength x
+ * colour / albedo per channel (albedo times it at most 1; the albedo
+ * multiplies it after the blur). */
 SSS_API sss_result sss_transmittance(const sss_material *mat,
                                      double thickness_metres, double facing,
                                      double out[3]);
@@ -456,13 +462,17 @@ SSS_API sss_result sss_transmission_reach(const sss_material *mat,
  * (1 - e^{-2 s a}) e^{-s (L - 2 a)} / (1 - e^{-2 s L}), L = max(t + 2 zb,
  * 2 a), s = sigma_tr (a / L when s L < 1e-6). A channel without a medium
  * (radius 0) gets zeros. SSS_ERR_UNSUPPORTED when the material's
- * transmission is not that slab. */
+ * transmission is not that slab. For Blender 4.x's Random Walk (Skin)
+ * (see sss_transmittance) it is the medium's slab, whose mean free path
+ * is 1.5 (a - zb); the transmittance is then the walk's, measured over
+ * thickness / mean free path and albedo, not this formula. */
 SSS_API sss_result sss_transmission_slab(const sss_material *mat,
                                          double sigma_tr[3], double a[3],
                                          double zb[3]);
 
 /* The same slab's transmittance relative to a part of thickness 0,
- * T(t) / T(0) per channel, sampled for a renderer that cannot call the
+ * T(t) / T(0) per channel (sss_transmittance's T, Blender 4.x's measured
+ * walk included), sampled for a renderer that cannot call the
  * library (the add-on's back-light layer looks it up in an image while
  * it renders, then writes thickness 0, which the library turns into
  * T(0)): table[3 i + c] is channel c at the thickness (of the thickness

@@ -15,10 +15,11 @@
  *  - burley: for a Burley profile, the share of the light entering the
  *    back face of a slab of thickness t that leaves by the front, from
  *    steady-state 1-D diffusion in the slab with the medium Cycles' random
- *    walk itself uses (see slab_make below). For a sum of 2-D Gaussians
- *    sum w_i G(v_i) (d'Eon, Jimenez, near/far profiles: no medium behind
- *    them) the profile's own mass beyond a plane at distance t,
- *    sum w_i e^{-t^2 / 2 v_i} (Golubev 2018, UE4, HDRP).
+ *    walk itself uses (see slab_make below); for Blender 4.x's Random
+ *    Walk (Skin) that walk's own, measured (walk4_make below). For a sum
+ *    of 2-D Gaussians sum w_i G(v_i) (d'Eon, Jimenez, near/far profiles:
+ *    no medium behind them) the profile's own mass beyond a plane at
+ *    distance t, sum w_i e^{-t^2 / 2 v_i} (Golubev 2018, UE4, HDRP).
  *  - jimenez: Jimenez et al. 2010 (SeparableSSS.h SSSSTransmittance):
  *    d'Eon's skin sum w_i e^{-s^2 / v_i} with s = t 8.25 (1 - translucency)
  *    / sssWidth (sssWidth = the material's jimenez_width).
@@ -54,6 +55,11 @@ typedef struct tmat {
 	double d[3];
 	double mfp[3];                   /* the slab's mean free path */
 	double sigma_tr[3], a[3], zb[3]; /* slab_make */
+	/* Blender 4.x's walk (walk4_make): the table's albedo row below the
+	 * channel's, the blend towards the next, each row's slab with l = 1
+	 * (sigma_tr, a, zb) for beyond the table, and the cap on T */
+	int walk4[3], w4row[3];
+	double w4f[3], w4unit[3][2][3], cap[3];
 	double var[3][SSS_MAX_GAUSSIANS], w[3][SSS_MAX_GAUSSIANS];
 	/* jimenez: s (mm of d'Eon's profile) per scene unit of thickness */
 	double s_per_unit;
@@ -159,6 +165,81 @@ static double slab_eval(double sigma_tr, double a, double zb, double t)
 	return T < 1.0 ? T : 1.0;
 }
 
+/* ------------------------------------------- Blender 4.x's walk
+ *
+ * Blender 4.x's Random Walk (Skin) is 3.4's Random Walk with the same
+ * radius mapping (sss_calibration.c, section 3) but carries more light
+ * through a thin slab than the slab above: the walk's light that crosses
+ * after few scatterings is not multiplied by the albedo, as this model's
+ * (times DiffCol) is, so the walk over the slab is 1.1 - 1.9 at A 0.6 -
+ * 0.95 and up to 16 at A 0.05 where the slab is a quarter of a mean free
+ * path. Measured on Blender 4.5.15 over t / l = 0.25 .. 90 and A = 0.05 ..
+ * 0.95 (scripts/measure_transmission4.sh, docs/transmission.md) and
+ * tabulated as ln T (sss_walk4_table.c, scripts/fit_transmission4.py):
+ * T is read linearly in x = t / l along the table's two albedo rows
+ * around A and blended linearly in A (in ln T), each row non-increasing,
+ * so T is too. Beyond the last column each row follows its slab's decay
+ * (T over the slab held); outside the rows' albedos the nearest row. T
+ * is the light the library multiplies by the albedo (and the
+ * calibration's gain) afterwards, so it exceeds 1 where the walk lets
+ * more through than A: it is capped at 1 / A (A T <= 1, no more light
+ * leaves than arrived). Materials whose calibration is
+ * SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN with the cycles-random-walk
+ * mapping use it; 3.x's (SSS_CALIBRATION_CYCLES_RANDOM_WALK) and every
+ * other material keep the slab above. */
+
+static void walk4_make(tmat *m, int c, double A)
+{
+	const float *an = sss__walk4_albedo;
+	double a = A < an[0] ? an[0] : A > an[SSS__WALK4_NA - 1]
+	           ? an[SSS__WALK4_NA - 1] : A;
+	int i = 0;
+	while (i < SSS__WALK4_NA - 2 && a >= an[i + 1])
+		i++;
+	m->walk4[c] = 1;
+	m->w4row[c] = i;
+	m->w4f[c] = (a - an[i]) / (an[i + 1] - an[i]);
+	for (int k = 0; k < 2; k++) {
+		double *u = m->w4unit[c][k];
+		slab_make(1.0, an[i + k], &u[0], &u[1], &u[2]);
+	}
+	m->cap[c] = 1.0 / (A > an[0] ? A : an[0]);
+}
+
+/* ln T of the table's row k at x = t / l >= 0 (+Inf allowed). */
+static double walk4_row(int k, const double unit[3], double x)
+{
+	const float *xs = sss__walk4_x, *r = sss__walk4_ln_t[k];
+	const int n = SSS__WALK4_NX;
+	if (x >= xs[n - 1])
+		return r[n - 1] + log(slab_eval(unit[0], unit[1], unit[2], x)) -
+		       log(slab_eval(unit[0], unit[1], unit[2], xs[n - 1]));
+	int j = 0;
+	while (j < n - 2 && x >= xs[j + 1])
+		j++;
+	double f = (x - xs[j]) / (xs[j + 1] - xs[j]);
+	return r[j] + f * (r[j + 1] - r[j]);
+}
+
+static double walk4_eval(const tmat *m, int c, double t)
+{
+	double x = t / m->mfp[c], f = m->w4f[c];
+	int i = m->w4row[c];
+	double v = f < 1.0 ? walk4_row(i, m->w4unit[c][0], x)
+	                   : walk4_row(i + 1, m->w4unit[c][1], x);
+	if (f > 0.0 && f < 1.0)
+		v = (1.0 - f) * v + f * walk4_row(i + 1, m->w4unit[c][1], x);
+	double T = exp(v);
+	return T < m->cap[c] ? T : m->cap[c];
+}
+
+/* T(t) of channel c's medium: the slab, or Blender 4.x's walk. */
+static double medium_eval(const tmat *m, int c, double t)
+{
+	return m->walk4[c] ? walk4_eval(m, c, t)
+	                   : slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], t);
+}
+
 /* len: scene units per metre of profile length (radius_scale/unit_scale). */
 static void tmat_make(const sss_material *mat, const sss_options *opt,
                       double unit_scale, tmat *m)
@@ -170,6 +251,7 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 		return;
 	double len = (double)opt->radius_scale / unit_scale;
 	for (int c = 0; c < 3; c++) {
+		m->cap[c] = 1.0;
 		m->gain[c] = mat->transmission_strength;
 		if (m->model != SSS_TRANSMISSION_BEER_LAMBERT)
 			m->gain[c] *= mat->transmission_color[c];
@@ -200,6 +282,10 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 			}
 			m->mfp[c] = l;
 			slab_make(l, A, &m->sigma_tr[c], &m->a[c], &m->zb[c]);
+			if (mat->calibration ==
+			    SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
+			    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK)
+				walk4_make(m, c, A);
 		}
 		break;
 	case SSS_TRANSMISSION_JIMENEZ: {
@@ -233,7 +319,7 @@ static void tmat_eval(const tmat *m, double t, double facing, double out[3])
 		case SSS_TRANSMISSION_BURLEY:
 			if (m->n[c] == 0) {
 				if (m->d[c] > 0.0)
-					T = slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], t);
+					T = medium_eval(m, c, t);
 				else
 					T = t == 0.0 ? 1.0 : 0.0;
 			} else {
@@ -281,7 +367,7 @@ static void tmat_eval(const tmat *m, double t, double facing, double out[3])
 			break;
 		}
 		/* Rounding must not let more light out than came in. */
-		out[c] = m->gain[c] * (T < 1.0 ? T : 1.0);
+		out[c] = m->gain[c] * (T < m->cap[c] ? T : m->cap[c]);
 	}
 }
 
@@ -324,12 +410,12 @@ sss_result sss_transmittance(const sss_material *mat, double thickness,
 static double slab_reach(const tmat *m, int c, double level, double mfps)
 {
 	double hi = mfps * m->mfp[c];
-	if (slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], hi) >= level)
+	if (medium_eval(m, c, hi) >= level)
 		return hi;
 	double lo = 0.0;
 	for (int i = 0; i < 60; i++) {
 		double mid = 0.5 * (lo + hi);
-		if (slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], mid) >= level)
+		if (medium_eval(m, c, mid) >= level)
 			lo = mid;
 		else
 			hi = mid;
@@ -426,7 +512,7 @@ sss_result sss_transmission_table(const sss_material *mat, int32_t n,
 		medium[c] = m.n[c] == 0 && m.d[c] > 0.0;
 		if (!medium[c])
 			continue;
-		T0[c] = slab_eval(m.sigma_tr[c], m.a[c], m.zb[c], 0.0);
+		T0[c] = medium_eval(&m, c, 0.0);
 		double e = slab_reach(&m, c, TABLE_FLOOR * T0[c], TABLE_MFPS);
 		end = e > end ? e : end;
 		l = m.mfp[c] < l ? m.mfp[c] : l;
@@ -445,8 +531,7 @@ sss_result sss_transmission_table(const sss_material *mat, int32_t n,
 		         : i == n - 1 ? end : expm1(g * (double)i) * *step * k;
 		for (int c = 0; c < 3; c++) {
 			double T = !medium[c] ? (t == 0.0 ? 1.0 : 0.0)
-			         : slab_eval(m.sigma_tr[c], m.a[c], m.zb[c], t) /
-			           T0[c];
+			         : medium_eval(&m, c, t) / T0[c];
 			if (i == n - 1 && k != 0.0)
 				T = 0.0; /* nothing beyond the table */
 			table[3 * (size_t)i + (size_t)c] = (float)(T < 1.0 ? T : 1.0);

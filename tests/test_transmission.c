@@ -3,6 +3,7 @@
  * thickness pass, energy, validation, the scene JSON and the back-light
  * layer of an EXR through sss_process_exr. */
 #include "test_util.h"
+#include "transmission4_measured.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -861,14 +862,20 @@ static void test_table(void)
 	static const float radii[] = {0.03f, 0.00367f, 1e-6f, 1e-9f};
 	static const float scales[] = {1.0f, 0.4f};
 	char id[64];
+	for (int wi = 0; wi < 2; wi++)
 	for (int ri = 0; ri < 4; ri++)
 		for (int si = 0; si < 2; si++) {
 			sss_material m = skin(SSS_TRANSMISSION_BURLEY, radii[ri]);
 			m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
 			m.albedo[0] = 0.95f; /* red: a long reach */
+			m.albedo[2] = 0.1f;  /* blue: 4.x's walk far above the slab */
+			/* 3.x's walk (the slab) and 4.x's (the measured table) */
+			m.calibration = wi ? SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN
+			                   : SSS_CALIBRATION_CYCLES_RANDOM_WALK;
 			m.thickness_scale = scales[si];
 			double step = -1.0, span = -1.0;
-			snprintf(id, sizeof id, "table.%g.%g", radii[ri], scales[si]);
+			snprintf(id, sizeof id, "table%s.%g.%g", wi ? "4" : "",
+			         radii[ri], scales[si]);
 			CHECK_STATUS(id, SSS_OK, sss_transmission_table(&m, N, table,
 			                                                &step, &span));
 			double g = log1p(span / step) / (N - 1);
@@ -902,23 +909,23 @@ static void test_table(void)
 					leaks += want == 0.0 && got != 0.0;
 				}
 			}
-			snprintf(id, sizeof id, "table.%g.%g.samples", radii[ri],
-			         scales[si]);
+			snprintf(id, sizeof id, "table%s.%g.%g.samples",
+			         wi ? "4" : "", radii[ri], scales[si]);
 			CHECK(id, step > 0.0 && span > step && worst < 1e-6,
 			      "step %g, span %g, off by %g", step, span, worst);
-			snprintf(id, sizeof id, "table.%g.%g.lookup", radii[ri],
-			         scales[si]);
+			snprintf(id, sizeof id, "table%s.%g.%g.lookup",
+			         wi ? "4" : "", radii[ri], scales[si]);
 			CHECK(id, worst_lookup < 5e-4, "off by %g", worst_lookup);
-			snprintf(id, sizeof id, "table.%g.%g.no-leak", radii[ri],
-			         scales[si]);
+			snprintf(id, sizeof id, "table%s.%g.%g.no-leak",
+			         wi ? "4" : "", radii[ri], scales[si]);
 			CHECK(id, leaks == 0 && rising == 0, "%d leaks, %d rising",
 			      leaks, rising);
 			/* The table ends where (almost) nothing crosses: its span is
 			 * the pass thickness, the slab's divided by the scale. */
 			double T[3];
 			sss_transmittance(&m, span, 1.0, T);
-			snprintf(id, sizeof id, "table.%g.%g.end", radii[ri],
-			         scales[si]);
+			snprintf(id, sizeof id, "table%s.%g.%g.end",
+			         wi ? "4" : "", radii[ri], scales[si]);
 			CHECK(id, T[0] <= 1.01e-6 * T0[0] && T[1] <= 1.01e-6 * T0[1] &&
 			      T[2] <= 1.01e-6 * T0[2], "T(end) %g %g %g", T[0], T[1],
 			      T[2]);
@@ -951,11 +958,103 @@ static void test_table(void)
 	             sss_transmission_table(&m, N, table, &step, &span));
 }
 
+/* A skin material of one walk: 3.x's Random Walk (the slab) or 4.x's
+ * Random Walk (Skin) (the measured table); albedo A in every channel. */
+static sss_material walk(int four, float A)
+{
+	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.02f);
+	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
+	m.calibration = four ? SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN
+	                     : SSS_CALIBRATION_CYCLES_RANDOM_WALK;
+	for (int c = 0; c < 3; c++)
+		m.albedo[c] = A;
+	return m;
+}
+
+/* The slab of sss.h from sss_transmission_slab's coefficients, the
+ * operations in the library's order. */
+static double slab_closed_form(double s, double a, double zb, double t)
+{
+	double L = t + 2.0 * zb;
+	if (!(L > 2.0 * a))
+		L = 2.0 * a;
+	double x = s * L;
+	if (x < 1e-6)
+		return a / L;
+	double y = s * a;
+	double T = -expm1(-2.0 * y) * exp(-(x - 2.0 * y)) / -expm1(-2.0 * x);
+	return T < 1.0 ? T : 1.0;
+}
+
+/* Blender 4.x's walk (sss_walk4_table.c): 3.x's materials keep the slab
+ * bit for bit; 4.x's follow the measured points within the fit's
+ * residual, never rise with the thickness, let at most all of the light
+ * through (A T <= 1) and nothing through an infinitely thick part. */
+static void test_walk4(void)
+{
+	static const float albedos[] = {0.0f, 0.02f, 0.05f, 0.13f, 0.45f,
+	                                0.8f, 0.93f, 0.95f, 0.99f, 1.0f};
+	int same = 1, differs = 0, rising = 0, over = 0, bad = 0, n = 0;
+	for (size_t k = 0; k < sizeof albedos / sizeof *albedos; k++) {
+		sss_material m3 = walk(0, albedos[k]), m4 = walk(1, albedos[k]);
+		m3.albedo[1] = m4.albedo[1] = 0.6f;
+		double s3[3], a3[3], z3[3], s4[3], a4[3], z4[3];
+		sss_transmission_slab(&m3, s3, a3, z3);
+		sss_transmission_slab(&m4, s4, a4, z4);
+		double prev[3] = {INFINITY, INFINITY, INFINITY};
+		for (int i = 0; i <= 400; i++) {
+			double t = i == 400 ? INFINITY : 1e-5 * expm1(0.03 * i);
+			double T3[3], T4[3];
+			sss_transmittance(&m3, t, 1.0, T3);
+			sss_transmittance(&m4, t, 1.0, T4);
+			for (int c = 0; c < 3; c++) {
+				same &= s3[c] == s4[c] && a3[c] == a4[c] && z3[c] == z4[c];
+				if (a3[c] > 0.0) {
+					double v = slab_closed_form(s3[c], a3[c], z3[c], t);
+					same &= memcmp(&v, &T3[c], sizeof v) == 0;
+				}
+				differs += T4[c] != T3[c];
+				rising += T4[c] > prev[c];
+				over += m4.albedo[c] * T4[c] > 1.0;
+				bad += !isfinite(T4[c]) || T4[c] < 0.0 ||
+				       (i == 400 && T4[c] != 0.0);
+				prev[c] = T4[c];
+				n++;
+			}
+		}
+	}
+	CHECK("walk4.3x-unchanged", same, "3.x's slab is not the closed form");
+	CHECK("walk4.differs", differs > n / 2, "%d of %d differ", differs, n);
+	CHECK("walk4.monotone", rising == 0, "%d rising of %d", rising, n);
+	CHECK("walk4.energy", over == 0 && bad == 0, "%d over 1 / A, %d bad",
+	      over, bad);
+
+	/* The measured points (tests/transmission4_measured.h). */
+	size_t np = sizeof walk4_measured / sizeof *walk4_measured;
+	double sum = 0.0, worst = 0.0;
+	for (size_t i = 0; i < np; i++) {
+		sss_material m = walk(1, (float)walk4_measured[i][0]);
+		double s[3], a[3], zb[3], T[3];
+		sss_transmission_slab(&m, s, a, zb);
+		double l = 1.5 * (a[0] - zb[0]);
+		sss_transmittance(&m, walk4_measured[i][1] * l, 1.0, T);
+		double e = fabs(log(T[0] / walk4_measured[i][2]));
+		sum += e * e;
+		worst = fmax(worst, e);
+	}
+	double rms = sqrt(sum / (double)np);
+	CHECK("walk4.measured", np > 50 && rms <= WALK4_FIT_RMS + 2e-3 &&
+	      worst <= WALK4_FIT_WORST + 2e-3, "%zu points: ln RMS %g "
+	      "(fit %g), largest %g (fit %g)", np, rms, WALK4_FIT_RMS, worst,
+	      WALK4_FIT_WORST);
+}
+
 int main(void)
 {
 	test_slab();
 	test_reach_and_slab();
 	test_table();
+	test_walk4();
 	test_models();
 	test_extremes();
 	test_validation();
