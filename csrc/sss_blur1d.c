@@ -55,8 +55,13 @@ void sss__blur1d_taps_scalar(sss__blur1d *b, const sss__taps *t, int32_t v0,
 				float q = sss__blur1d_q(b, j, j - b->i);
 				int valid = in && b->slot[j] == b->slot_c && q < b->cut_q;
 				for (int c = 0; c < 3; c++) {
-					float w = valid ? share * t->w[c][k] : 0.0f;
-					float wgt = w * sss__blur1d_rho(q, t->a8[c][k]);
+					float wk = t->w[c][k], ak = t->a8[c][k];
+					if (t->w1[0]) {
+						wk = wk + t->f * (t->w1[c][k] - wk);
+						ak = ak + t->f * (t->a81[c][k] - ak);
+					}
+					float w = valid ? share * wk : 0.0f;
+					float wgt = w * sss__blur1d_rho(q, ak);
 					acc[c][lane] += wgt * b->rgb[c][j];
 					ws[c][lane] += wgt;
 				}

@@ -106,6 +106,10 @@ typedef struct sss__taps {
 	float *at;
 	float *w[3], *a8[3];
 	float *cell;           /* count / SSS__LANES */
+	/* Or weights interpolated between two rows, w + f (w1 - w) and
+	 * a8 + f (a81 - a8) (a cut kernel's table); w1[0] NULL: none. */
+	float *w1[3], *a81[3];
+	float f;
 } sss__taps;
 
 void sss__blur1d_scalar(sss__blur1d *b);

@@ -159,6 +159,8 @@ AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t,
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 cut = _mm256_set1_ps(b->cut_q), r = _mm256_set1_ps(b->r);
+	const int lerp = t->w1[0] != NULL;
+	const __m256 f_rows = _mm256_set1_ps(t->f);
 	const __m256i centre = _mm256_set1_epi32(b->i);
 	const __m256i len = _mm256_set1_epi32(b->len);
 	const __m256i last = _mm256_set1_epi32(b->len - 1);
@@ -213,9 +215,15 @@ AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t,
 				_mm256_castsi256_ps(_mm256_and_si256(in, same)),
 				_mm256_cmp_ps(q, cut, _CMP_LT_OQ));
 			for (int c = 0; c < 3; c++) {
-				__m256 w = _mm256_and_ps(
-					_mm256_mul_ps(share, _mm256_loadu_ps(t->w[c] + k)), valid);
+				__m256 wk = _mm256_loadu_ps(t->w[c] + k);
 				__m256 a = _mm256_loadu_ps(t->a8[c] + k);
+				if (lerp) {
+					wk = _mm256_add_ps(wk, _mm256_mul_ps(f_rows, _mm256_sub_ps(
+						_mm256_loadu_ps(t->w1[c] + k), wk)));
+					a = _mm256_add_ps(a, _mm256_mul_ps(f_rows, _mm256_sub_ps(
+						_mm256_loadu_ps(t->a81[c] + k), a)));
+				}
+				__m256 w = _mm256_and_ps(_mm256_mul_ps(share, wk), valid);
 				__m256 tt = _mm256_max_ps(
 					_mm256_sub_ps(one, _mm256_mul_ps(q, a)), zero);
 				__m256 t2 = _mm256_mul_ps(tt, tt);

@@ -173,6 +173,9 @@ static void taps_point(sss__taps *l, float *m, int32_t n)
 		l->a8[c] = m + (4 + c) * size;
 	}
 	l->cell = m + 7 * size;
+	for (int c = 0; c < 3; c++)
+		l->w1[c] = l->a81[c] = NULL;
+	l->f = 0.0f;
 }
 
 /* Taps 0..n at offsets at[t] (units of the half-width) with weights
@@ -379,8 +382,7 @@ static sss_result cap_build(const sss__job *job, const sss__kernel *k,
 /* Where a cut pixel's weights lie in its table: rows r0 and r0 + 6 count
  * floats on, interpolated by f at upp units per pixel; 0 if upp lies
  * outside the table. */
-static int cap_row(const struct capped *c, double upp, const float **r0,
-                   float *f)
+static int cap_row(const struct capped *c, double upp, float **r0, float *f)
 {
 	double x = (log(upp) - c->lu0) * CAP_STEPS;
 	if (!(x >= 0.0 && x <= c->rows - 1))
@@ -398,27 +400,9 @@ typedef struct scratch {
 	sss__tap *tap;
 	float *at, *wa;
 	sss__taps taps;
-	sss__taps cut;  /* a cut kernel's: weights in taps' arrays, offsets
-	                   and cells its table's, interpolated between the
-	                   rows at cut_r0 by cut_f vector by vector as the
-	                   sums need them (cut_fill) */
-	const float *cut_r0;
-	float cut_f;
+	sss__taps cut;  /* a cut kernel's: offsets, cells and two rows of
+	                   weights its table's, interpolated in the loop */
 } scratch;
-
-/* The cut taps' weights of vectors v0 .. v1 - 1. */
-static void cut_fill(scratch *sc, int32_t v0, int32_t v1)
-{
-	size_t size = (size_t)sc->cut.count;
-	const float *r0 = sc->cut_r0, *r1 = r0 + 6 * size;
-	float f = sc->cut_f;
-	for (int p = 0; p < 6; p++) {
-		float *o = p < 3 ? sc->cut.w[p] : sc->cut.a8[p - 3];
-		for (size_t i = (size_t)v0 * SSS__LANES; i < (size_t)v1 * SSS__LANES;
-		     i++)
-			o[i] = r0[p * size + i] + f * (r1[p * size + i] - r0[p * size + i]);
-	}
-}
 
 static void *scratch_new(scratch *sc, int32_t half)
 {
@@ -431,7 +415,6 @@ static void *scratch_new(scratch *sc, int32_t half)
 	sc->at = (float *)(void *)(sc->tap + taps);
 	sc->wa = sc->at + taps;
 	taps_point(&sc->taps, sc->wa + taps * PARAMS, half);
-	sc->cut = sc->taps;
 	return m;
 }
 
@@ -548,14 +531,22 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 	if (!capped && r >= t->half + 0.5)
 		return &t->sparse;
 	const struct capped *cut = &t->cap[!ctx->first];
+	float *r0, f;
 	if (capped && cut->r == r &&
-	    cap_row(cut, ax->ortho ? 1.0 / ax->f : zc / ax->f, &sc->cut_r0,
-	            &sc->cut_f)) {
-		/* a limit cut the kernel: its table's taps */
-		sc->cut.count = cut->layout.count;
-		sc->cut.at = cut->layout.at;
-		sc->cut.cell = cut->layout.cell;
-		return &sc->cut;
+	    cap_row(cut, ax->ortho ? 1.0 / ax->f : zc / ax->f, &r0, &f)) {
+		/* a limit cut the kernel: its table's taps, the weights
+		 * interpolated between two rows as they are read */
+		size_t size = (size_t)cut->layout.count;
+		sss__taps *l = &sc->cut;
+		*l = cut->layout;
+		for (int c = 0; c < 3; c++) {
+			l->w[c] = r0 + c * size;
+			l->a8[c] = r0 + (3 + c) * size;
+			l->w1[c] = l->w[c] + 6 * size;
+			l->a81[c] = l->a8[c] + 6 * size;
+		}
+		l->f = f;
+		return l;
 	}
 	/* Weights for this pixel alone: the tap budget is too large to
 	 * tabulate, or the depth lies outside the table. */
@@ -574,10 +565,8 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 
 /* The sums of vectors v0 .. v1 - 1 of taps at b's pixel. */
 static void taps_sum(const pass_ctx *ctx, sss__blur1d *b, const sss__taps *t,
-                     int32_t v0, int32_t v1, scratch *sc)
+                     int32_t v0, int32_t v1)
 {
-	if (t == &sc->cut)
-		cut_fill(sc, v0, v1);
 	if (ctx->avx2)
 		sss__blur1d_taps_avx2(b, t, v0, v1);
 	else
@@ -608,7 +597,7 @@ static void anchor_at(const pass_ctx *ctx, const sss__blur1d *row,
 	                                 &b);
 	if (!far_is_wide(&b, t))
 		return;
-	taps_sum(ctx, &b, t, NEAR_VECTORS, t->count / SSS__LANES, sc);
+	taps_sum(ctx, &b, t, NEAR_VECTORS, t->count / SSS__LANES);
 	a->ok = 1;
 	a->slot = row->slot[pos];
 	a->capped = capped;
@@ -655,7 +644,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 		int32_t nv = t->count / SSS__LANES;
 		int32_t near = nv < NEAR_VECTORS ? nv : NEAR_VECTORS;
 		float acc[3], ws[3];
-		taps_sum(ctx, &b, t, 0, near, sc);
+		taps_sum(ctx, &b, t, 0, near);
 		for (int c = 0; c < 3; c++) {
 			acc[c] = b.acc[c];
 			ws[c] = b.wsum[c];
@@ -683,7 +672,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 				b.wsum[c] = anc[0].ws[c];
 			}
 		} else if (nv > near) {
-			taps_sum(ctx, &b, t, near, nv, sc);
+			taps_sum(ctx, &b, t, near, nv);
 			if (d == 0) { /* the next pixels' left anchor */
 				anchor *a = &anc[0];
 				a->pos = i;
