@@ -538,7 +538,9 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 		 * interpolated between two rows as they are read */
 		size_t size = (size_t)cut->layout.count;
 		sss__taps *l = &sc->cut;
-		*l = cut->layout;
+		l->count = cut->layout.count;
+		l->at = cut->layout.at;
+		l->cell = cut->layout.cell;
 		for (int c = 0; c < 3; c++) {
 			l->w[c] = r0 + c * size;
 			l->a8[c] = r0 + (3 + c) * size;

@@ -55,6 +55,7 @@ typedef struct tmat {
 	double d[3];
 	double mfp[3];                   /* the slab's mean free path */
 	double sigma_tr[3], a[3], zb[3]; /* slab_make */
+	double edge[3];                  /* slab_edge */
 	/* Blender 4.x's walk (walk4_make): the table's albedo row below the
 	 * channel's, the blend towards the next, each row's slab with l = 1
 	 * (sigma_tr, a, zb) for beyond the table, and the cap on T */
@@ -150,7 +151,8 @@ static void slab_make(double l, double A, double *sigma_tr, double *a,
 }
 
 /* T(t) of the slab above, t >= 0 (+Inf allowed). */
-static double slab_eval(double sigma_tr, double a, double zb, double t)
+static double slab_eval_c(double sigma_tr, double a, double zb,
+                          double edge, double t)
 {
 	double L = t + 2.0 * zb;
 	if (!(L > 2.0 * a))
@@ -161,8 +163,22 @@ static double slab_eval(double sigma_tr, double a, double zb, double t)
 	if (x < 1e-6)
 		return a / L; /* no absorption: the linear flux profile */
 	double y = sigma_tr * a;
-	double T = -expm1(-2.0 * y) * exp(-(x - 2.0 * y)) / -expm1(-2.0 * x);
+	/* Past x = 20, 1 - e^-2x is 1 in doubles (e^-40 is far below half
+	 * the spacing below 1): the same value without its exponential. */
+	double below = x > 20.0 ? 1.0 : -expm1(-2.0 * x);
+	double T = edge * exp(-(x - 2.0 * y)) / below;
 	return T < 1.0 ? T : 1.0;
+}
+
+/* The slab's edge factor 1 - e^-2y, y = sigma_tr a: one per channel. */
+static double slab_edge(double sigma_tr, double a)
+{
+	return -expm1(-2.0 * (sigma_tr * a));
+}
+
+static double slab_eval(double sigma_tr, double a, double zb, double t)
+{
+	return slab_eval_c(sigma_tr, a, zb, slab_edge(sigma_tr, a), t);
 }
 
 /* ------------------------------------------- Blender 4.x's walk
@@ -237,7 +253,8 @@ static double walk4_eval(const tmat *m, int c, double t)
 static double medium_eval(const tmat *m, int c, double t)
 {
 	return m->walk4[c] ? walk4_eval(m, c, t)
-	                   : slab_eval(m->sigma_tr[c], m->a[c], m->zb[c], t);
+	                   : slab_eval_c(m->sigma_tr[c], m->a[c], m->zb[c],
+	                                 m->edge[c], t);
 }
 
 /* len: scene units per metre of profile length (radius_scale/unit_scale). */
@@ -282,6 +299,7 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 			}
 			m->mfp[c] = l;
 			slab_make(l, A, &m->sigma_tr[c], &m->a[c], &m->zb[c]);
+			m->edge[c] = slab_edge(m->sigma_tr[c], m->a[c]);
 			if (mat->calibration ==
 			    SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
 			    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK)
