@@ -331,11 +331,11 @@ compare: deps all
 			--python-exit-code 1 --python blender_scripts/compare.py -- \
 			--scene $(BUILD)/compare/$$kind.blend --out out/compare/$$kind \
 			$(COMPARE_ARGS) >>$$log 2>&1 || { tail -n 40 $$log; exit 1; }; \
-		grep -E '^(compare|scene|  )' $$log; \
+		grep -E "^(compare|scene|  |$$kind: )" $$log; \
 	done
 	@cat $(patsubst %,out/compare/%/summary.txt,$(COMPARE_SCENES)) \
 		>out/compare/summary.txt
-	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,results.csv,results.md} and out/compare/summary.txt"
+	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,time.png,results.csv,results.md} and out/compare/summary.txt"
 
 # Never worse than no SSS: every bundled scene, the sharp-edged block and
 # a small front-lit sphere seen orthographically, with every Subsurface

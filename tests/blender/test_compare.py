@@ -28,8 +28,8 @@ def test_compare_quick(tmp_path):
         capture_output=True, text=True, timeout=400, env=env)
     log = proc.stdout[-3000:] + proc.stderr[-3000:]
     assert proc.returncode == 0, log
-    for name in ("sheet.png", "plot.png", "results.csv", "results.md",
-                 "summary.txt"):
+    for name in ("sheet.png", "plot.png", "time.png", "results.csv",
+                 "results.md", "summary.txt"):
         assert (out / name).stat().st_size > 1000 or name == "summary.txt", \
             name
     assert not (out / "work").exists()  # intermediate EXRs cleaned up
@@ -92,6 +92,11 @@ def test_compare_quick(tmp_path):
         assert float(denoised["random-walk+oidn", 16]["rmse"]) < \
             float(rw[0]["rmse"])
         assert "with OIDN on both" in md
+        # The trade at equal wall time, one line for the scene.
+        line = next(x for x in (out / "summary.txt").read_text()
+                    .splitlines() if x.startswith(f"{SCENE}: "))
+        assert ("ours+OIDN ahead of walk+OIDN" in line or
+                "never ahead" in line), line
 
 
 
