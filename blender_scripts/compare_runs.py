@@ -333,7 +333,9 @@ class Denoiser:
         scene.render.use_compositing = True
 
     def __call__(self, path, layer, name):
-        """(denoised RGB of layer.name in path, seconds)."""
+        """(denoised RGB of layer.name in path, seconds); the result is
+        kept beside path as PATH_oidn.exr (Combined) or PATH_oidn_NAME.exr
+        (a light pass), so that a pass does not overwrite the image."""
         tree, image_node, aux_node = self.tree, self.image_node, self.aux_node
         image = bpy.data.images.load(path, check_existing=False)
         image_node.image = aux_node.image = image
@@ -347,7 +349,9 @@ class Denoiser:
         tree.links.new(aux_node.outputs["Denoising Albedo"],
                        self.denoise.inputs["Albedo"])
         seconds = render(self.scene)
-        result = save_result(self.scene, path.replace(".exr", "_oidn.exr"))
+        suffix = "_oidn" if name == "Combined" else f"_oidn_{name}"
+        result = save_result(self.scene, path.replace(".exr",
+                                                      suffix + ".exr"))
         bpy.data.images.remove(image)
         return rgb(result, "Composite.Combined"), seconds
 
