@@ -152,11 +152,11 @@ def summarise(bench, args):
             if renderer == "cycles":
                 out += oidn_lines(rows, n, default)
     out += goal_lines(rows, default)
-    out.append(equal_time(bench, args)[0])
     for r in rows:
         if r["method"] == "eevee-sss":
             out.append(f"  eevee own SSS {r['samples']} spp: RMSE "
                        f"{err(r, 'rmse'):.4g} in {r['total_s']:.2f} s")
+    out.append(equal_time(bench, args)[0])
     return out
 
 
