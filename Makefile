@@ -39,7 +39,8 @@
 #                 sharp-edged one, radius 1e-6x to 1e3x, against Cycles 4.5's
 #                 random walk: out/compare/sweep/SCENE/sweep.{png,md,csv}
 #                 and out/compare/sweep/summary.{png,md}
-#   make figures  the README's picture docs/images/head.png (compare on head)
+#   make figures  the README's picture docs/images/head.png (compare on
+#                 head: ours and the random walk at equal time, denoised)
 #   make screenshots  the add-on's panels, docs/images/ui-*.png, and a live
 #                 re-tune in a window, docs/images/live.png (Xvfb, 3.4)
 #   make clean    remove build/
@@ -332,11 +333,11 @@ compare: deps all
 			--python-exit-code 1 --python blender_scripts/compare.py -- \
 			--scene $(BUILD)/compare/$$kind.blend --out out/compare/$$kind \
 			$(COMPARE_ARGS) >>$$log 2>&1 || { tail -n 40 $$log; exit 1; }; \
-		grep -E '^(compare|scene|  )' $$log; \
+		grep -E "^(compare|scene|  |$$kind: )" $$log; \
 	done
 	@cat $(patsubst %,out/compare/%/summary.txt,$(COMPARE_SCENES)) \
 		>out/compare/summary.txt
-	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,results.csv,results.md} and out/compare/summary.txt"
+	@echo "compare: wrote out/compare/SCENE/{sheet.png,plot.png,time.png,results.csv,results.md} and out/compare/summary.txt"
 
 # Never worse than no SSS: every bundled scene, the sharp-edged block and
 # a small front-lit sphere seen orthographically, with every Subsurface
@@ -393,11 +394,14 @@ error-budget: deps all $(filter $(BUILD)/%,$(BUDGET_BLENDER))
 	@$(BUDGET_BLENDER) -b --factory-startup --python-exit-code 1 \
 		--python blender_scripts/error_budget.py -- --summary out/error_budget
 
-# The README's picture: the head scene without SSS, with the library and
-# with Cycles' random walk (the reference), each with its time, from a
-# compare run on head that keeps its images (scripts/readme_figure.py):
-# docs/images/head.png. FIGURE_ARGS are compare.py's options for that run.
-FIGURE_ARGS ?= --samples 64 --rw-samples 64,512 --no-eevee --no-denoise
+# The README's picture at equal wall time, both sides denoised: the head
+# scene without SSS, with the library, with Cycles' random walk at the
+# count whose time is closest to ours, and the reference, each with its
+# time and error, from a compare run on head that keeps its images
+# (scripts/readme_figure.py): docs/images/head.png. FIGURE_ARGS are
+# compare.py's options for that run; BLENDER=build/bpy-4.5.15/bin/blender
+# for the committed picture.
+FIGURE_ARGS ?= --samples 64 --rw-samples 1,2,4,8,16,32,64,128,1024 --no-eevee
 figures:
 	@SSS_COMPARE_KEEP_WORK=1 $(MAKE) --no-print-directory compare \
 		COMPARE_SCENES=head COMPARE_ARGS="$(FIGURE_ARGS)"

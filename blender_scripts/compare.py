@@ -39,7 +39,11 @@ error; metrics in compare_metrics.py), plot.png (error against total time,
 log axes, one line per method) and summary.txt (also in results.md): per
 sample count, the error reduction of the best and of the default method
 against the no-SSS render at the same samples (also both denoised), and
-the random-walk sample count reaching the same error, with both times.
+the random-walk sample count reaching the same error, with both times,
+and up to what wall time ours + OIDN is ahead of the denoised random walk
+(compare_metrics.equal_time: the walk's curve interpolated in log time);
+time.png (that trade: error at quarter resolution against wall time,
+render + post-process + OIDN, the walk's curve and ours').
 
 The .blend is opened, never saved; the add-on restores what it switches
 off. --quick: 160x120, random walk 16/64/256 (reference 256), our methods
@@ -62,7 +66,7 @@ import separable_sss  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
 from separable_sss import description, native  # noqa: E402
 
-from compare_figures import contact_sheet, plot  # noqa: E402
+from compare_figures import contact_sheet, plot, time_plot  # noqa: E402
 from compare_report import score, summarise, write_tables  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
@@ -157,10 +161,12 @@ def main():
     summary = summarise(bench, args)
     contact_sheet(bench, args, os.path.join(args.out, "sheet.png"))
     plot(bench, args, os.path.join(args.out, "plot.png"))
+    time_plot(bench, args, os.path.join(args.out, "time.png"))
     write_tables(bench, args, summary)
     for line in summary:
         print(line)
-    log(f"wrote {args.out}/results.csv, results.md, sheet.png, plot.png "
+    log(f"wrote {args.out}/results.csv, results.md, sheet.png, plot.png, "
+        f"time.png "
         f"({time.perf_counter() - t_start:.0f} s)")
     if os.environ.get("SSS_COMPARE_KEEP_WORK") != "1":
         shutil.rmtree(bench.work, ignore_errors=True)

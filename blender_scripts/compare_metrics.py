@@ -234,6 +234,101 @@ def interp_samples(samples, errors, target):
                         slope)), "extrapolated"
 
 
+def equal_time(ours, walk):
+    """Where ours is ahead of the walk at equal wall time. ours and walk:
+    [(seconds, error, samples)], one point per sample count (both
+    denoised, say). The walk's error at any time is its curve: log(error)
+    linear in log(seconds) between its measured points (interp_samples
+    over seconds); it "reaches" an error at the first time its curve is
+    at or below it, at its first point if that is already below, and not
+    at all if only extrapolation would. Ours at a time budget is the best
+    of its points that fit: a point with no less error than a cheaper one
+    never counts. A point of ours at t with error e is ahead from t until
+    the walk reaches e (if that is later than t).
+
+    Returns a dict: "intervals", [(start, end)] in seconds where ours is
+    ahead, merged, end inf where the walk never reaches that error within
+    its measured counts; "points", per counted point of ours a dict:
+    seconds, error, samples, reach (seconds when the walk reaches its
+    error, inf: never within the measured ones; nan: no walk), reach_samples
+    (the walk's samples there, log samples linear in log seconds),
+    how (interp_samples's word), ahead (bool)."""
+    ours = sorted((float(t), float(e), n) for t, e, n in ours
+                  if np.isfinite(e) and e > 0 and t > 0)
+    walk = sorted((float(t), float(e), float(n)) for t, e, n in walk
+                  if np.isfinite(e) and e > 0 and t > 0)
+    points, best = [], float("inf")
+    for t, e, n in ours:
+        if e >= best:
+            continue
+        best = e
+        reach, how = interp_samples([w[0] for w in walk],
+                                    [w[1] for w in walk], e)
+        if how == "extrapolated":
+            reach = float("inf")
+        if np.isfinite(reach):
+            reach_n = float(np.exp(np.interp(
+                np.log(reach), [np.log(w[0]) for w in walk],
+                [np.log(w[2]) for w in walk])))
+        else:
+            reach_n = reach
+        points.append(dict(seconds=t, error=e, samples=n, reach=reach,
+                           reach_samples=reach_n, how=how,
+                           ahead=bool(reach > t)))
+    intervals = []
+    for p in points:
+        if not p["ahead"]:
+            continue
+        if intervals and p["seconds"] <= intervals[-1][1]:
+            intervals[-1] = (intervals[-1][0], max(intervals[-1][1],
+                                                   p["reach"]))
+        else:
+            intervals.append((p["seconds"], p["reach"]))
+    return dict(intervals=intervals, points=points)
+
+
+def equal_time_line(name, result, walk, ours_label="ours+OIDN",
+                    walk_label="walk+OIDN"):
+    """One line on equal_time's result (walk: its input, for the walk's
+    own points)."""
+    points, intervals = result["points"], result["intervals"]
+    walk = sorted((float(t), float(e), n) for t, e, n in walk
+                  if np.isfinite(e) and e > 0 and t > 0)
+    if not points or len(walk) < 2:
+        return (f"{name}: no equal-time comparison ({ours_label} and "
+                f"{walk_label} at two counts or more are needed)")
+    if not intervals:
+        best = points[-1]
+        first = walk[0]
+        if first[1] <= best["error"]:
+            return (f"{name}: never ahead: {walk_label} at {first[2]:g} spp "
+                    f"({first[0]:.1f} s) is already closer ({first[1]:.4f} "
+                    f"against {ours_label}'s best {best['error']:.4f} at "
+                    f"{best['samples']:g} spp, {best['seconds']:.1f} s)")
+        return (f"{name}: never ahead: {walk_label} reaches "
+                f"{ours_label}'s best ({best['error']:.4f} at "
+                f"{best['samples']:g} spp, {best['seconds']:.1f} s) in "
+                f"{best['reach']:.1f} s (about {best['reach_samples']:.0f} "
+                "spp)")
+    start, end = intervals[-1]
+    last = max((p for p in points if p["ahead"]), key=lambda p: p["reach"])
+    gaps = "".join(f"; not from {a:.1f} to {b:.1f} s" for (_, a), (b, _)
+                   in zip(intervals, intervals[1:]))
+    since = f"from {intervals[0][0]:.1f} s " if intervals[0][0] > 0 else ""
+    if not np.isfinite(end):
+        top = walk[-1]
+        return (f"{name}: {ours_label} ahead of {walk_label} {since}on, "
+                f"past the walk's largest count: at {top[2]:g} spp "
+                f"({top[0]:.1f} s) it has {top[1]:.4f}, {ours_label} "
+                f"{last['error']:.4f} at {last['samples']:g} spp "
+                f"({last['seconds']:.1f} s){gaps}")
+    fewest = " (its fewest)" if last["how"] == "below" else ""
+    return (f"{name}: {ours_label} ahead of {walk_label} {since}up to "
+            f"{end:.1f} s (walk needs {last['reach_samples']:.0f} spp"
+            f"{fewest} to match {ours_label}'s {last['error']:.4f} at "
+            f"{last['samples']:g} spp, {last['seconds']:.1f} s){gaps}")
+
+
 def time_at(samples, seconds, n):
     """Render time at n samples: piecewise linear between the measured
     (samples, seconds), proportional to the nearest end outside them."""

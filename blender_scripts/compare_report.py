@@ -1,7 +1,8 @@
 """The scores and tables of make compare (compare.py): each image's error
 against the reference (compare_metrics.py), results.csv and results.md,
-and the summary: the error cut of our methods against no SSS, and the
-random-walk sample count that reaches the same error."""
+and the summary: the error cut of our methods against no SSS, the
+random-walk sample count that reaches the same error, and up to what wall
+time ours + OIDN is ahead of the denoised random walk."""
 import csv
 import math
 import os
@@ -155,7 +156,26 @@ def summarise(bench, args):
         if r["method"] == "eevee-sss":
             out.append(f"  eevee own SSS {r['samples']} spp: RMSE "
                        f"{err(r, 'rmse'):.4g} in {r['total_s']:.2f} s")
+    out.append(equal_time(bench, args)[0])
     return out
+
+
+def equal_time_series(rows, default):
+    """(ours, walk) for compare_metrics.equal_time: the default method and
+    the random walk, both denoised (OIDN), as (total seconds, error at
+    quarter resolution, samples) per sample count."""
+    def series(method):
+        return [(r["total_s"], err(r, "rmse_q"), r["samples"]) for r in rows
+                if r["renderer"] == "cycles" and r["method"] == method]
+    return series(default + DENOISED), series("random-walk" + DENOISED)
+
+
+def equal_time(bench, args):
+    """(the summary's line on the trade at equal wall time, ours, walk,
+    compare_metrics.equal_time's result)."""
+    ours, walk = equal_time_series(bench.rows, bench.default_method)
+    result = cm.equal_time(ours, walk)
+    return cm.equal_time_line(args.name, result, walk), ours, walk, result
 
 
 def oidn_lines(rows, n, default):

@@ -399,7 +399,22 @@ def markdown(results):
             out.append(f"| {r['scene']} | {x['what']} | {x['samples']} | "
                        f"{x['seconds']:.1f} | {x['rmse_q_c']:.4f} | "
                        f"{x['mean_ratio']:.3f} |")
+    out.append("")
+    out += [equal_time_line(r) for r in results]
     return "\n".join(out) + "\n"
+
+
+def equal_time_line(result):
+    """Up to what wall time ours + OIDN is ahead of the denoised walk
+    (compare_metrics.equal_time, as make compare says it)."""
+    import compare_metrics as cm
+
+    def series(what):
+        return [(x["seconds"], x["rmse_q_c"], x["samples"])
+                for x in result["runs"] if x["what"] == what]
+    walk = series("walk + OIDN")
+    return cm.equal_time_line(result["scene"], cm.equal_time(
+        series("ours + OIDN"), walk), walk)
 
 
 def summary(folder):

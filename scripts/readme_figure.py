@@ -1,25 +1,32 @@
-"""The README's picture, docs/images/head.png: the bundled head scene
-without SSS, with libsss and with Cycles' random walk side by side, each
-captioned with its samples and time, from the output of
-blender_scripts/compare.py on that scene (`make figures` runs both).
+"""The README's picture, docs/images/head.png: the bundled head scene at
+equal wall time, both sides denoised: the render without SSS (as it
+comes, for what scattering changes), with libsss + OIDN,
+Cycles' random walk + OIDN at the sample count whose time is closest to
+ours, and the reference; each captioned with its samples, wall time and
+error, from the output of blender_scripts/compare.py on that scene (`make
+figures` runs both).
 
     /usr/bin/python3 scripts/readme_figure.py [--compare out/compare/head]
-        [--out docs/images/head.png] [--samples N] [--rw-samples N]
-        [--method NAME] [--width 900]
+        [--out docs/images/head.png] [--samples N] [--method NAME]
+        [--width 1000]
 
 Reads, under the compare folder: results.csv (the times: total_s is the
-render plus the library's scatter time), summary.txt (the default method)
-and the work/ folder, which compare.py keeps when SSS_COMPARE_KEEP_WORK=1:
-cycles_N_passes.exr (the render with material SSS off), cycles_N_METHOD.exr
-(the library's result), cycles_N_scene.json (the scattering materials) and
-rw_N.exr, or rw_N_1.exr and rw_N_2.exr for the reference (the random walk
-at its highest count, the mean of two renders of half its samples).
+render plus the library's scatter time plus the denoise; the errors:
+rmse_q_c, RMSE at quarter resolution against the reference with its noise
+taken out), summary.txt (the default method) and the work/ folder, which
+compare.py keeps when SSS_COMPARE_KEEP_WORK=1: cycles_N_passes.exr (the
+render with material SSS off) and cycles_N_scene.json (the scattering
+materials), the denoised images cycles_N_METHOD_oidn.exr and
+rw_M_oidn.exr, and rw_R_1.exr and rw_R_2.exr
+for the reference (the random walk at its highest count, the mean of two
+renders of half its samples). Where compare has no OIDN rows (a Blender
+without OpenImageDenoise) the images are not denoised and the captions say
+so.
 
 Every panel has compare's contact-sheet view: the same crop (the
 scattering pixels' bounding box) and exposure (the reference's 99th
 percentile luminance over the scattering pixels at 0.85), gamma 2.2.
-Defaults: the largest SSS-off sample count, the scene's default method
-and the reference random walk.
+Defaults: the largest SSS-off sample count and the scene's default method.
 """
 import argparse
 import csv
@@ -52,11 +59,9 @@ def parse_args():
                                                  "head.png"))
     p.add_argument("--samples", type=int, help="samples of the SSS-off "
                    "render (default: the largest measured)")
-    p.add_argument("--rw-samples", type=int, help="samples of the random "
-                   "walk (default: the reference, the largest)")
     p.add_argument("--method", help="library method (default: the scene's, "
                    "from summary.txt)")
-    p.add_argument("--width", type=int, default=900, help="pixels")
+    p.add_argument("--width", type=int, default=1000, help="pixels")
     return p.parse_args()
 
 
@@ -69,8 +74,10 @@ def read_rows(folder):
         rows = list(csv.DictReader(f))
     for r in rows:
         r["samples"] = int(r["samples"])
-        for k in ("render_s", "post_s", "total_s"):
+        for k in ("render_s", "post_s", "total_s", "rmse_q", "rmse_q_c"):
             r[k] = float(r[k])
+        r["error"] = r["rmse_q_c"] if np.isfinite(r["rmse_q_c"]) else \
+            r["rmse_q"]
     return rows
 
 
@@ -114,28 +121,41 @@ def work_file(folder, name):
     return path
 
 
+DENOISED = "+oidn"   # compare_runs.DENOISED (that module needs bpy)
+
+
 def images(args, rows):
     folder = args.compare
     method = args.method or default_method(folder)
     off = pick(rows, "no-sss", args.samples)
     n = off["samples"]
-    ours = pick(rows, method, n)
     passes_path = work_file(folder, f"cycles_{n}_passes.exr")
     passes = read_exr(passes_path)
-    ours_path = work_file(folder, f"cycles_{n}_{method}.exr")
-    ours_img = rgb(read_exr(ours_path), "SSS.Combined", ours_path)
+    dn = DENOISED if any(r["method"] == method + DENOISED for r in rows) \
+        else ""
+    suffix = "_oidn" if dn else ""
+    layer = "Composite.Combined" if dn else None
+
+    def image(row, name, own):
+        path = work_file(folder, name + suffix + ".exr")
+        return row, rgb(read_exr(path), layer or own, path)
+
+    off_img = rgb(passes, "Combined", passes_path)
+    ours, ours_img = image(pick(rows, method + dn, n),
+                           f"cycles_{n}_{method}", "SSS.Combined")
+    # The random walk whose wall time is closest to ours'.
+    walks = [r for r in rows if r["renderer"] == "cycles" and
+             r["method"] == "random-walk" + dn]
+    if not walks:
+        fail(f"results.csv has no random-walk{dn} row")
+    near = min(walks, key=lambda r: abs(r["total_s"] - ours["total_s"]))
+    rw, rw_img = image(near, f"rw_{near['samples']}", "Combined")
 
     # The reference: the mean of its two halves, as compare.py takes it.
     ref = pick(rows, REF)
     halves = [rgb(read_exr(p), "Combined", p) for p in (
         work_file(folder, f"rw_{ref['samples']}_{k}.exr") for k in (1, 2))]
     ref_img = (halves[0] + halves[1]) / 2
-    if args.rw_samples and args.rw_samples != ref["samples"]:
-        rw = pick(rows, "random-walk", args.rw_samples)
-        path = work_file(folder, f"rw_{rw['samples']}.exr")
-        rw_img = rgb(read_exr(path), "Combined", path)
-    else:
-        rw, rw_img = ref, ref_img
 
     # The scattering pixels, as compare.py takes them: a scattering
     # material's index (from the scene description) in front of the
@@ -156,23 +176,21 @@ def images(args, rows):
     # The reference's exposure, as on compare's contact sheet.
     exposure = cm.exposure_for(ref_img, mask)
 
-    no_sss_img = rgb(passes, "Combined", passes_path)
+    plus = " + OIDN" if dn else " (not denoised: no OIDN)"
     panels = [
-        ("no SSS", off, no_sss_img),
-        (f"libsss ({method})", ours, ours_img),
-        ("Cycles random walk", rw, rw_img),
+        ("no SSS", off, off_img),
+        (f"libsss ({method})" + plus, ours, ours_img),
+        ("Cycles random walk" + plus, rw, rw_img),
+        ("reference: random walk", ref, ref_img),
     ]
     return panels, mask, exposure
 
 
 def caption(title, row):
-    t = row["total_s"]
-    if row["post_s"] > 0:
-        how = (f"{row['samples']} spp: {t:.1f} s (render "
-               f"{row['render_s']:.1f} s + SSS {row['post_s']:.2f} s)")
-    else:
-        how = f"{row['samples']} spp: {t:.1f} s"
-    return f"{title}\n{how}"
+    how = f"{row['samples']} spp, {row['total_s']:.1f} s"
+    if row["method"] == REF:
+        return f"{title}\n{how}"
+    return f"{title}\n{how}, error {row['error']:.3f}"
 
 
 def draw(args, panels, mask, exposure):
@@ -212,7 +230,7 @@ def main():
     panels, mask, exposure = images(args, rows)
     draw(args, panels, mask, exposure)
     for title, row, _ in panels:
-        print(f"readme_figure: {caption(title, row)}".replace("\n", ", "))
+        print(f"readme_figure: {caption(title, row)}".replace("\n", ": "))
     print(f"readme_figure: wrote {args.out} "
           f"({os.path.getsize(args.out) // 1024} KiB)")
 

@@ -28,8 +28,8 @@ def test_compare_quick(tmp_path):
         capture_output=True, text=True, timeout=400, env=env)
     log = proc.stdout[-3000:] + proc.stderr[-3000:]
     assert proc.returncode == 0, log
-    for name in ("sheet.png", "plot.png", "results.csv", "results.md",
-                 "summary.txt"):
+    for name in ("sheet.png", "plot.png", "time.png", "results.csv",
+                 "results.md", "summary.txt"):
         assert (out / name).stat().st_size > 1000 or name == "summary.txt", \
             name
     assert not (out / "work").exists()  # intermediate EXRs cleaned up
@@ -92,7 +92,47 @@ def test_compare_quick(tmp_path):
         assert float(denoised["random-walk+oidn", 16]["rmse"]) < \
             float(rw[0]["rmse"])
         assert "with OIDN on both" in md
+        # The trade at equal wall time, one line for the scene.
+        line = next(x for x in (out / "summary.txt").read_text()
+                    .splitlines() if x.startswith(f"{SCENE}: "))
+        assert ("ours+OIDN ahead of walk+OIDN" in line or
+                "never ahead" in line), line
 
+
+
+def test_eevee_passes_recombine_to_its_combined():
+    """EEVEE averages light and colour over its samples separately: at a
+    half-covered silhouette pixel their product is a quarter of the light
+    where Combined has half. What the passes miss goes into Emit, so that
+    the library's recombination returns Combined; the light passes stay
+    as they were."""
+    import sys
+    import numpy as np
+    sys.path.insert(0, os.path.join(ROOT, "blender_scripts"))
+    import compare_runs as cr
+    rng = np.random.default_rng(3)
+    h, w = 4, 5
+    light, col = rng.uniform(0.2, 2, (h, w, 3)), rng.uniform(0.1, 0.9,
+                                                             (h, w, 3))
+    gloss, gcol = rng.uniform(0, 5, (h, w, 3)), rng.uniform(0, 0.3,
+                                                           (h, w, 3))
+    cover = np.ones((h, w, 1))
+    cover[:, -1] = 0.5          # a silhouette column over black
+    comb = cover * (light * col + gloss * gcol)
+    ch = {}
+    for name, a in (("Combined", comb), ("DiffDir", cover * light),
+                    ("DiffCol", cover * col), ("GlossDir", cover * gloss),
+                    ("GlossCol", cover * gcol)):
+        for i, c in enumerate("RGB"):
+            ch[f"ViewLayer.{name}.{c}"] = a[:, :, i].astype(np.float32)
+    before = cr.recombined(ch, "ViewLayer")
+    assert np.allclose(before[:, :-1], comb[:, :-1], atol=1e-5)
+    assert np.allclose(before[:, -1], comb[:, -1] / 2, atol=1e-5)
+    out = cr.eevee_residual_into_emit(dict(ch), "ViewLayer")
+    assert np.allclose(cr.recombined(out, "ViewLayer"), comb, atol=1e-5)
+    assert np.abs(out["ViewLayer.Emit.R"][:, :-1]).max() < 1e-5
+    for k, v in ch.items():
+        assert out[k] is v
 
 
 def test_sweep_radius(tmp_path):

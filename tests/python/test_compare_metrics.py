@@ -147,3 +147,82 @@ def test_interp_samples():
     n, how = cm.interp_samples(s, e, 0.05)
     assert how == "extrapolated" and n == pytest.approx(1024, rel=1e-6)
     assert cm.time_at([16, 64], [1.0, 4.0], 32) == pytest.approx(2.0)
+
+
+def walk_curve(counts=(1, 2, 4, 8, 16, 32, 64, 128, 256)):
+    """A made-up denoised walk: error 0.4 / sqrt(n) in 0.5 n seconds, a
+    power law, so the curve in log time is exact between its points."""
+    return [(0.5 * n, 0.4 / np.sqrt(n), n) for n in counts]
+
+
+def test_equal_time_ahead_up_to_where_the_walk_catches_up():
+    walk = walk_curve()
+    ours = [(2.0, 0.1, 16), (5.0, 0.08, 64), (20.0, 0.075, 256)]
+    r = cm.equal_time(ours, walk)
+    # The walk reaches 0.1 at 16 spp (8 s), 0.08 at 25 spp (12.5 s) and
+    # 0.075 at 28.4 spp (14.2 s), before ours' 20 s.
+    assert [p["ahead"] for p in r["points"]] == [True, True, False]
+    assert r["points"][0]["reach"] == pytest.approx(8.0)
+    assert r["points"][1]["reach"] == pytest.approx(12.5)
+    assert r["points"][1]["reach_samples"] == pytest.approx(25.0)
+    assert r["points"][2]["reach"] == pytest.approx(0.5 * (0.4 / 0.075) ** 2)
+    assert r["intervals"] == [(2.0, pytest.approx(12.5))]
+    line = cm.equal_time_line("head", r, walk)
+    assert line.startswith("head: ours+OIDN ahead of walk+OIDN from 2.0 s "
+                           "up to 12.5 s (walk needs 25 spp to match")
+    assert "0.0800 at 64 spp, 5.0 s" in line
+
+
+def test_equal_time_never_ahead():
+    walk = walk_curve()
+    # The walk's fewest samples are already closer than anything of ours.
+    r = cm.equal_time([(3.0, 0.5, 16), (9.0, 0.45, 64)], walk)
+    assert r["intervals"] == [] and not any(p["ahead"] for p in r["points"])
+    line = cm.equal_time_line("marble", r, walk)
+    assert line.startswith("marble: never ahead: walk+OIDN at 1 spp (0.5 s) "
+                           "is already closer (0.4000 against")
+    assert "best 0.4500 at 64 spp, 9.0 s" in line
+    # The walk catches ours' error (0.1, its 16 spp) at 8 s, before ours'
+    # 10 s.
+    r = cm.equal_time([(10.0, 0.1, 16)], walk)
+    assert r["intervals"] == []
+    assert r["points"][0]["reach"] == pytest.approx(8.0)
+    assert cm.equal_time_line("x", r, walk) == (
+        "x: never ahead: walk+OIDN reaches ours+OIDN's best (0.1000 at 16 "
+        "spp, 10.0 s) in 8.0 s (about 16 spp)")
+
+
+def test_equal_time_always_ahead():
+    walk = walk_curve()
+    # 0.01 is below the walk's 256 spp (0.025): no measured count reaches
+    # it, and the extrapolation is not trusted.
+    r = cm.equal_time([(1.0, 0.03, 16), (4.0, 0.01, 64)], walk)
+    assert r["intervals"] == [(1.0, float("inf"))]
+    line = cm.equal_time_line("mixed", r, walk)
+    assert line.startswith("mixed: ours+OIDN ahead of walk+OIDN from 1.0 s "
+                           "on, past the walk's largest count: at 256 spp "
+                           "(128.0 s) it has 0.0250, ours+OIDN 0.0100")
+
+
+def test_equal_time_gaps_dominated_points_and_the_fewest_walk():
+    walk = walk_curve()
+    # Ahead from 1 to 2 s (the walk reaches 0.2 at 4 spp), behind until
+    # ours' 256 spp at 20 s, ahead again until the walk's 64 spp (32 s);
+    # the 64-spp point is no better than the 16-spp one: not counted.
+    ours = [(1.0, 0.2, 16), (4.0, 0.2, 64), (20.0, 0.05, 256)]
+    r = cm.equal_time(ours, walk)
+    assert [p["samples"] for p in r["points"]] == [16, 256]
+    assert r["intervals"] == [(1.0, pytest.approx(2.0)),
+                              (20.0, pytest.approx(32.0))]
+    line = cm.equal_time_line("s", r, walk)
+    assert "up to 32.0 s (walk needs 64 spp to match" in line
+    assert line.endswith("; not from 2.0 to 20.0 s")
+    # Faster than the walk's fewest samples, which are already closer:
+    # ahead only until that render is done.
+    r = cm.equal_time([(0.3, 0.45, 16)], walk)
+    assert r["intervals"] == [(0.3, 0.5)]
+    assert "up to 0.5 s (walk needs 1 spp (its fewest) to match" in \
+        cm.equal_time_line("s", r, walk)
+    # Too little to compare.
+    assert "no equal-time comparison" in cm.equal_time_line(
+        "s", cm.equal_time([], walk), walk)

@@ -94,3 +94,19 @@ def test_the_render_without_sss_is_measured_in_the_same_blocks():
     assert abs(rows["silhouettes"]["rmse_plain"] -
                rows["silhouettes"]["rmse"]) < 0.02
     assert rows["rest"]["rmse_plain"] > 0.05 > rows["rest"]["rmse"]
+
+
+def test_the_summary_says_up_to_what_time_ours_is_ahead():
+    """budget.md's line on the trade at equal wall time, on made-up runs
+    (compare_metrics.equal_time: the walk reaches ours' 0.05 at its 16
+    spp, 8 s, after ours' 3 s)."""
+    ref, idx, depth, mask, _ = frame()
+    rows, _ = split(ref * 1.1, ref, idx, depth, mask)
+    runs = [dict(what="ours + OIDN", samples=16, seconds=3.0,
+                 rmse_q_c=0.05, mean_ratio=1.0)]
+    runs += [dict(what="walk + OIDN", samples=n, seconds=0.5 * n,
+                  rmse_q_c=0.2 / np.sqrt(n), mean_ratio=1.0)
+             for n in (4, 8, 16, 64)]
+    md = eb.markdown([dict(scene="head", runs=runs, budget=rows)])
+    assert "\nhead: ours+OIDN ahead of walk+OIDN from 3.0 s up to 8.0 s " \
+        "(walk needs 16 spp to match" in md
