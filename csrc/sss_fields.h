@@ -28,8 +28,9 @@
  * from it, sss_scene.c the JSON reader's material keys, the add-on its
  * material settings and their scene-description keys (properties.py,
  * description.py), and tests/test_scene.c checks docs/scene.md against
- * it. A new field is one line here plus the code that uses it (and, if
- * artists set it, its line in the add-on's panel, ui.py). */
+ * it. A new field is one line here and its sss_material member, plus the
+ * code that uses it (and, if artists set it, its line in the add-on's
+ * panel, ui.py); `make scene-doc` writes its row in docs/scene.md. */
 #ifndef SSS_FIELDS_H
 #define SSS_FIELDS_H
 

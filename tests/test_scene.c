@@ -876,8 +876,8 @@ static void test_doc_table(void)
 		char head[96], type[64], def[128], range[256], sets[96];
 		snprintf(head, sizeof head, "\n| `%s` | ", f.key);
 		const char *row = strstr(section, head);
-		CHECK(f.key, row != NULL, "docs/scene.md has no row for '%s'",
-		      f.key);
+		CHECK(f.key, row != NULL, "docs/scene.md has no row for '%s' "
+		      "(make scene-doc writes one)", f.key);
 		if (!row)
 			continue;
 		doc_cells(&f, i, type, def, range, sizeof range);
