@@ -773,6 +773,22 @@ static void test_simd_matches_scalar(void)
 	synth_free(s);
 }
 
+/* An orthographic camera one unit wide and a Burley material (pass index
+ * 1) whose support spans px pixels of a w-pixel-wide image under it. */
+static void ortho_burley(int w, double px, sss_camera *cam, sss_material *m)
+{
+	sss_camera_default(cam);
+	cam->type = SSS_CAMERA_ORTHOGRAPHIC;
+	cam->ortho_scale = 1.0;
+	sss_material_default(m, SSS_PROFILE_BURLEY);
+	m->pass_index = 1;
+	double support;
+	sss_material_support(m, &support);
+	double scale = px / (support * w / cam->ortho_scale);
+	for (int c = 0; c < 3; c++)
+		m->radius[c] *= (float)scale;
+}
+
 /* An orthographic camera: a sample's in-plane distance does not depend on
  * depth. A plane tilted away from the camera, Burley on noise and on a
  * shadow edge: separable close to the reference, and the vector loop gives
@@ -788,17 +804,8 @@ static void test_orthographic(void)
 		}
 	synth_noise(s, 0, 1, 41);
 	sss_camera cam;
-	sss_camera_default(&cam);
-	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
-	cam.ortho_scale = 1.0;
 	sss_material m;
-	sss_material_default(&m, SSS_PROFILE_BURLEY);
-	m.pass_index = 1;
-	double support;
-	sss_material_support(&m, &support);
-	double px = 8.0, scale = px / (support * w / cam.ortho_scale);
-	for (int c = 0; c < 3; c++)
-		m.radius[c] *= (float)scale;
+	ortho_burley(w, 8.0, &cam, &m);
 	sss_options sep = options(SSS_METHOD_SEPARABLE);
 	sss_options ref = options(SSS_METHOD_REFERENCE);
 	run a = apply_cam(s, &m, 1, &sep, &cam), b = apply_cam(s, &m, 1, &ref, &cam);
@@ -898,17 +905,8 @@ static void test_far_interpolation(void)
 {
 	int w = 460, h = 1, reach = 160;
 	sss_camera cam;
-	sss_camera_default(&cam);
-	cam.type = SSS_CAMERA_ORTHOGRAPHIC;
-	cam.ortho_scale = 1.0;
 	sss_material m;
-	sss_material_default(&m, SSS_PROFILE_BURLEY);
-	m.pass_index = 1;
-	double support;
-	sss_material_support(&m, &support);
-	double px = 150.0, scale = px / (support * w / cam.ortho_scale);
-	for (int c = 0; c < 3; c++)
-		m.radius[c] *= (float)scale;
+	ortho_burley(w, 150.0, &cam, &m);
 	synth *s = synth_new(w, h);
 	synth_plane(s, 0, 0, w, h, 2.0f, 1.0f);
 	for (int x = 0; x < w; x++)
