@@ -209,8 +209,11 @@ def reference(args, scene):
     import compare_runs as compare
     from exr_io import read_exr, rgb
     os.makedirs(args.cache, exist_ok=True)
+    # Each Blender's walk is its own reference: the key names the version.
+    version = blender_version().split()[0]
     stem = os.path.join(args.cache, f"{args.name}_{args.resolution[0]}x"
-                        f"{args.resolution[1]}_rw{args.ref_samples}")
+                        f"{args.resolution[1]}_rw{args.ref_samples}"
+                        f"_{version}")
     paths = [f"{stem}_{k}.exr" for k in (1, 2)]
     if all(os.path.exists(p) for p in paths):
         log(f"reference from {stem}_[12].exr")

@@ -266,9 +266,11 @@ enum sss_texturing {
 
 /* Back-lit transmission: light that arrives at the back of a thin part
  * (sss_passes.back_dir + back_ind, B) and crosses its thickness t is added
- * to the diffuse light BEFORE the blur, so it is softened like the rest:
- * L' = L + strength x T(t) x B per channel, with T <= 1 (the diffuse colour,
- * i.e. the albedo, multiplies it after the blur as it does all light).
+ * to the diffuse light AFTER the blur, not blurred: it spread sideways over
+ * the part's thickness, which B (a Translucent BSDF's chords through the
+ * part) already holds, not over the radius. L' = blur(L) + strength x T(t)
+ * x B per channel, with T <= 1 (the diffuse colour, i.e. the albedo,
+ * multiplies it as it does all diffuse light).
  * Thickness NaN or negative means "unknown": nothing is added there. */
 enum sss_transmission {
 	SSS_TRANSMISSION_OFF = 0,
@@ -444,7 +446,7 @@ SSS_API sss_result sss_kernel_1d(const sss_material *mat,
  * SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN), whose measured walk lets
  * more than the albedo through thin parts: there at most strength x
  * colour / albedo per channel (albedo times it at most 1; the albedo
- * multiplies it after the blur). */
+ * multiplies it in the image). */
 SSS_API sss_result sss_transmittance(const sss_material *mat,
                                      double thickness_metres, double facing,
                                      double out[3]);

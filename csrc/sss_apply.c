@@ -136,7 +136,6 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss_passes *p = ctx->p;
 	const sss__kernel *kernels = ctx->kernels;
 	const int16_t *by_index = ctx->by_index;
-	const sss__transmission *transmission = ctx->transmission;
 	int16_t *slot = ctx->slot;
 	int32_t w = ctx->w;
 	for (int32_t y = y0; y < y1; y++) {
@@ -167,8 +166,6 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 			                                   : NULL;
 			for (int c = 0; c < 3; c++)
 				s[c] = di ? dd[c] + di[c] : dd[c];
-			if (transmission) /* back-lit light, before the blur */
-				sss__transmission_add(transmission, k, x, y, s);
 			if (kernels[k].texturing == SSS_TEXTURING_PRE_AND_POST) {
 				const float *col = sss__at(&p->diff_col, x, y);
 				for (int c = 0; c < 3; c++)
@@ -283,6 +280,16 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 					}
 				}
 				light[c] = l;
+			}
+			if (slot[i] >= 0 && ctx->transmission) {
+				/* back-lit light, after the blur: it crossed the part
+				 * and spread over its thickness, not over the radius
+				 * (transmission.md, "Not blurred") */
+				float t[3] = {0.0f, 0.0f, 0.0f};
+				sss__transmission_add(ctx->transmission, slot[i], x, y, t);
+				for (int c = 0; c < 3; c++)
+					if (kernels[slot[i]].mix[c] > 0.0f)
+						light[c] += t[c];
 			}
 			if (slot[i] >= 0) { /* energy calibration, at the exit
 			                       pixel's colour and view
@@ -616,8 +623,8 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	                    errbuf_len)))
 		return r;
 	int32_t w = p->diff_dir.width, h = p->diff_dir.height;
-	/* Transmission (sss_transmission.c): back-lit light joins the signal
-	 * before the blur; NULL when nothing transmits. */
+	/* Transmission (sss_transmission.c): back-lit light joins the
+	 * diffuse light after the blur; NULL when nothing transmits. */
 	sss__transmission *transmission = NULL;
 	if ((r = sss__transmission_prepare(p, materials, material_count, &opt,
 	                                   cam->unit_scale, w, h, out_combined,

@@ -1,15 +1,17 @@
 /* sss_transmission.c - back-lit transmission: light that reaches the back
- * of a thin part and crosses it, added to the diffuse light before the
- * blur (so it is softened like the rest).
+ * of a thin part and crosses it, added to the diffuse light after the
+ * blur: across a part of thickness t the light spreads sideways over
+ * about t, and where T(t) matters t is below the profile's reach, so the
+ * radius-wide blur would smear it (transmission.md, "Not blurred").
  *
  * Inputs per pixel: B, the light arriving from behind (the DiffDir and
  * DiffInd of a view layer whose material override is a white Translucent
  * BSDF: Cycles shades the visible point with the light that reaches it
  * through the object, shadows included), and t, the object's local
  * thickness there. The added light is strength x T(t) x B with T <= 1; the
- * diffuse colour (the albedo A) multiplies it after the blur like all
- * diffuse light, so T(0) = 1 here is A in the final image: the
- * albedo-consistent maximum of the models below.
+ * diffuse colour (the albedo A) multiplies it like all diffuse light, so
+ * T(0) = 1 here is A in the final image: the albedo-consistent maximum of
+ * the models below.
  *
  * Models (sss_transmission in sss.h):
  *  - burley: for a Burley profile, the share of the light entering the

@@ -1,5 +1,5 @@
 /* sss_transmission.h - private interface of sss_transmission.c: back-lit
- * transmission added to the diffuse light before the blur. */
+ * transmission added to the diffuse light after the blur. */
 #ifndef SSS_TRANSMISSION_H
 #define SSS_TRANSMISSION_H
 
