@@ -61,6 +61,11 @@ def parse_args():
     p.add_argument("--slab-albedo", default="",
                    help="slab mode: the skin's colour (Base and Subsurface "
                    "Color) as R,G,B instead of the scene's")
+    p.add_argument("--slab-method", default="",
+                   help="slab mode: the skin's subsurface method "
+                   "(RANDOM_WALK_SKIN, RANDOM_WALK; the add-on's names: "
+                   "3.x's Random Walk is RANDOM_WALK_SKIN) instead of the "
+                   "scene's")
     p.add_argument("--model", default="BURLEY",
                    help="transmission model for materials that have it off "
                    "(the add-on's default): BURLEY, JIMENEZ, BEER_LAMBERT, "
@@ -132,6 +137,8 @@ def slab_sweep(args):
                 mat = bpy.data.materials["Skin"]
                 bsdf = mat.node_tree.nodes["Principled BSDF"]
                 compat.set_subsurface_factor(bsdf, sub)
+                if args.slab_method:
+                    compat.set_method(bsdf, args.slab_method)
                 if args.slab_albedo:
                     colour = (*[float(v) for v in
                                 args.slab_albedo.split(",")], 1.0)

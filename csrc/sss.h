@@ -443,8 +443,9 @@ SSS_API sss_result sss_kernel_1d(const sss_material *mat,
  * Thickness NaN or negative gives 0; +Inf gives the thick limit. At most
  * strength x colour, except for Blender 4.x's Random Walk (Skin) (a
  * Burley profile with SSS_BURLEY_CYCLES_RANDOM_WALK and
- * SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN), whose measured walk lets
- * more than the albedo through thin parts: there at most strength x
+ * SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN) and Random Walk
+ * (SSS_BURLEY_CYCLES4_RANDOM_WALK and SSS_CALIBRATION_CYCLES4_RANDOM_WALK),
+ * whose measured walks let more than the albedo through thin parts: there at most strength x
  * colour / albedo per channel (albedo times it at most 1; the albedo
  * multiplies it in the image). */
 SSS_API sss_result sss_transmittance(const sss_material *mat,
@@ -464,7 +465,7 @@ SSS_API sss_result sss_transmission_reach(const sss_material *mat,
  * (1 - e^{-2 s a}) e^{-s (L - 2 a)} / (1 - e^{-2 s L}), L = max(t + 2 zb,
  * 2 a), s = sigma_tr (a / L when s L < 1e-6). A channel without a medium
  * (radius 0) gets zeros. SSS_ERR_UNSUPPORTED when the material's
- * transmission is not that slab. For Blender 4.x's Random Walk (Skin)
+ * transmission is not that slab. For Blender 4.x's two random walks
  * (see sss_transmittance) it is the medium's slab, whose mean free path
  * is 1.5 (a - zb); the transmittance is then the walk's, measured over
  * thickness / mean free path and albedo, not this formula. */

@@ -58,10 +58,12 @@ typedef struct tmat {
 	double mfp[3];                   /* the slab's mean free path */
 	double sigma_tr[3], a[3], zb[3]; /* slab_make */
 	double edge[3];                  /* slab_edge */
-	/* Blender 4.x's walk (walk4_make): the table's albedo row below the
-	 * channel's, the blend towards the next, each row's slab with l = 1
-	 * (sigma_tr, a, zb) for beyond the table, and the cap on T */
-	int walk4[3], w4row[3];
+	/* Blender 4.x's walk (walk4_make): its table (NULL: the slab), the
+	 * table's albedo row below the channel's, the blend towards the next,
+	 * each row's slab with l = 1 (sigma_tr, a, zb) for beyond the table,
+	 * and the cap on T */
+	const sss__walk4_table *walk4[3];
+	int w4row[3];
 	double w4f[3], w4unit[3][2][3], cap[3];
 	double var[3][SSS_MAX_GAUSSIANS], w[3][SSS_MAX_GAUSSIANS];
 	/* jimenez: s (mm of d'Eon's profile) per scene unit of thickness */
@@ -193,7 +195,7 @@ static double slab_eval(double sigma_tr, double a, double zb, double t)
  * 0.95 and up to 16 at A 0.05 where the slab is a quarter of a mean free
  * path. Measured on Blender 4.5.15 over t / l = 0.25 .. 90 and A = 0.05 ..
  * 0.95 (scripts/measure_transmission4.sh, docs/transmission.md) and
- * tabulated as ln T (sss_walk4_table.c, scripts/fit_transmission4.py):
+ * tabulated as ln T (sss_walk4_skin_table.c, scripts/fit_transmission4.py):
  * T is read linearly in x = t / l along the table's two albedo rows
  * around A and blended linearly in A (in ln T), each row non-increasing,
  * so T is too. Beyond the last column each row follows its slab's decay
@@ -203,18 +205,35 @@ static double slab_eval(double sigma_tr, double a, double zb, double t)
  * more through than A: it is capped at 1 / A (A T <= 1, no more light
  * leaves than arrived). Materials whose calibration is
  * SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN with the cycles-random-walk
- * mapping use it; 3.x's (SSS_CALIBRATION_CYCLES_RANDOM_WALK) and every
- * other material keep the slab above. */
+ * mapping use it. 4.x's plain Random Walk (the method of a new material)
+ * has its own table, measured the same way (sss_walk4_rw_table.c, where
+ * the slab was up to 245 times off), for the calibration and mapping
+ * SSS_CALIBRATION_CYCLES4_RANDOM_WALK / SSS_BURLEY_CYCLES4_RANDOM_WALK.
+ * 3.x's (SSS_CALIBRATION_CYCLES_RANDOM_WALK) and every other material
+ * keep the slab above. */
 
-static void walk4_make(tmat *m, int c, double A)
+/* The measured table of mat's walk, or NULL: the slab. */
+static const sss__walk4_table *walk4_table(const sss_material *mat)
 {
-	const float *an = sss__walk4_albedo;
+	if (mat->calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
+	    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK)
+		return &sss__walk4_skin;
+	if (mat->calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK &&
+	    mat->burley_mapping == SSS_BURLEY_CYCLES4_RANDOM_WALK)
+		return &sss__walk4_rw;
+	return NULL;
+}
+
+static void walk4_make(tmat *m, int c, double A,
+                       const sss__walk4_table *table)
+{
+	const float *an = table->albedo;
 	double a = A < an[0] ? an[0] : A > an[SSS__WALK4_NA - 1]
 	           ? an[SSS__WALK4_NA - 1] : A;
 	int i = 0;
 	while (i < SSS__WALK4_NA - 2 && a >= an[i + 1])
 		i++;
-	m->walk4[c] = 1;
+	m->walk4[c] = table;
 	m->w4row[c] = i;
 	m->w4f[c] = (a - an[i]) / (an[i + 1] - an[i]);
 	for (int k = 0; k < 2; k++) {
@@ -225,9 +244,10 @@ static void walk4_make(tmat *m, int c, double A)
 }
 
 /* ln T of the table's row k at x = t / l >= 0 (+Inf allowed). */
-static double walk4_row(int k, const double unit[3], double x)
+static double walk4_row(const sss__walk4_table *table, int k,
+                        const double unit[3], double x)
 {
-	const float *xs = sss__walk4_x, *r = sss__walk4_ln_t[k];
+	const float *xs = table->x, *r = table->ln_t[k];
 	const int n = SSS__WALK4_NX;
 	if (x >= xs[n - 1])
 		return r[n - 1] + log(slab_eval(unit[0], unit[1], unit[2], x)) -
@@ -243,10 +263,11 @@ static double walk4_eval(const tmat *m, int c, double t)
 {
 	double x = t / m->mfp[c], f = m->w4f[c];
 	int i = m->w4row[c];
-	double v = f < 1.0 ? walk4_row(i, m->w4unit[c][0], x)
-	                   : walk4_row(i + 1, m->w4unit[c][1], x);
+	const sss__walk4_table *tb = m->walk4[c];
+	double v = f < 1.0 ? walk4_row(tb, i, m->w4unit[c][0], x)
+	                   : walk4_row(tb, i + 1, m->w4unit[c][1], x);
 	if (f > 0.0 && f < 1.0)
-		v = (1.0 - f) * v + f * walk4_row(i + 1, m->w4unit[c][1], x);
+		v = (1.0 - f) * v + f * walk4_row(tb, i + 1, m->w4unit[c][1], x);
 	double T = exp(v);
 	return T < m->cap[c] ? T : m->cap[c];
 }
@@ -302,10 +323,9 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 			m->mfp[c] = l;
 			slab_make(l, A, &m->sigma_tr[c], &m->a[c], &m->zb[c]);
 			m->edge[c] = slab_edge(m->sigma_tr[c], m->a[c]);
-			if (mat->calibration ==
-			    SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
-			    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK)
-				walk4_make(m, c, A);
+			const sss__walk4_table *table = walk4_table(mat);
+			if (table)
+				walk4_make(m, c, A, table);
 		}
 		break;
 	case SSS_TRANSMISSION_JIMENEZ: {

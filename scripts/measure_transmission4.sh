@@ -3,7 +3,11 @@
 # thickness / mean free path (blender_scripts/measure_transmission.py's
 # slab mode), for scripts/fit_transmission4.py:
 #
-#   sh scripts/measure_transmission4.sh BLENDER OUT [RESOLUTION] [RW_SPP]
+#   sh scripts/measure_transmission4.sh BLENDER OUT [RESOLUTION] [RW_SPP] \
+#       [METHOD] [SETS]
+#
+# METHOD: RANDOM_WALK_SKIN (the default) or RANDOM_WALK (4.x's plain Random
+# Walk, the default of a new material); SETS: which of a - e to run (all).
 #
 # Four slab colours, each channel's albedo paired with a radius (the slab's
 # 1, 0.5, 0.25 times Subsurface) so that the three mean free paths are
@@ -14,6 +18,8 @@ blender=$1
 out=$2
 res=${3:-64x64}
 spp=${4:-1024}
+method=${5:-RANDOM_WALK_SKIN}
+sets=${6:-abcde}
 root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 "$blender" -b --factory-startup --python-exit-code 1 \
@@ -23,6 +29,7 @@ mkdir -p "$out"
 run() {
 	name=$1 albedo=$2 sub=$3 l=$4
 	shift 4
+	case $sets in *"$name"*) ;; *) return 0 ;; esac
 	ts=$(for x in "$@"; do echo "$x $l"; done |
 		awk '{printf "%s%.6g", (NR > 1 ? "," : ""), $1 * $2}')
 	SSS_LIB=$root/build/libsss.so "$blender" -b --factory-startup \
@@ -30,6 +37,7 @@ run() {
 		--python "$root/blender_scripts/measure_transmission.py" -- \
 		--scene "$out/slab.blend" --out "$out/$name" --slab-sweep "$ts" \
 		--slab-subsurface "$sub" --slab-albedo "$albedo" \
+		--slab-method "$method" \
 		--resolution "$res" --rw-samples "$spp" --samples 128 \
 		>"$out/$name.log" 2>&1 || { tail -n 30 "$out/$name.log"; exit 1; }
 }

@@ -3,7 +3,8 @@
  * thickness pass, energy, validation, the scene JSON and the back-light
  * layer of an EXR through sss_process_exr. */
 #include "test_util.h"
-#include "transmission4_measured.h"
+#include "transmission4_rw_measured.h"
+#include "transmission4_skin_measured.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -965,14 +966,21 @@ static void test_table(void)
 	             sss_transmission_table(&m, N, table, &step, &span));
 }
 
-/* A skin material of one walk: 3.x's Random Walk (the slab) or 4.x's
- * Random Walk (Skin) (the measured table); albedo A in every channel. */
-static sss_material walk(int four, float A)
+/* A skin material of one walk, albedo A in every channel: 3.x's Random
+ * Walk (WALK_3X: the slab), 4.x's Random Walk (Skin) (WALK_SKIN) or
+ * Random Walk (WALK_RW), both measured tables; WALK_RW_SLAB is WALK_RW's
+ * medium with no calibration, so the slab. */
+enum { WALK_3X, WALK_SKIN, WALK_RW, WALK_RW_SLAB };
+static sss_material walk(int kind, float A)
 {
 	sss_material m = skin(SSS_TRANSMISSION_BURLEY, 0.02f);
-	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
-	m.calibration = four ? SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN
-	                     : SSS_CALIBRATION_CYCLES_RANDOM_WALK;
+	int four = kind == WALK_RW || kind == WALK_RW_SLAB;
+	m.burley_mapping = four ? SSS_BURLEY_CYCLES4_RANDOM_WALK
+	                        : SSS_BURLEY_CYCLES_RANDOM_WALK;
+	m.calibration = kind == WALK_SKIN ? SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN
+	                : kind == WALK_RW ? SSS_CALIBRATION_CYCLES4_RANDOM_WALK
+	                : kind == WALK_3X ? SSS_CALIBRATION_CYCLES_RANDOM_WALK
+	                                  : SSS_CALIBRATION_NONE;
 	for (int c = 0; c < 3; c++)
 		m.albedo[c] = A;
 	return m;
@@ -993,17 +1001,23 @@ static double slab_closed_form(double s, double a, double zb, double t)
 	return T < 1.0 ? T : 1.0;
 }
 
-/* Blender 4.x's walk (sss_walk4_table.c): 3.x's materials keep the slab
- * bit for bit; 4.x's follow the measured points within the fit's
- * residual, never rise with the thickness, let at most all of the light
- * through (A T <= 1) and nothing through an infinitely thick part. */
-static void test_walk4(void)
+/* One of Blender 4.x's walks (sss_walk4_KIND_table.c) against the slab
+ * of the same medium (kind WALK_SKIN against WALK_3X, WALK_RW against
+ * WALK_RW_SLAB): the slab's materials keep it bit for bit; the walk's
+ * follow the measured points within the fit's residual, never rise with
+ * the thickness, let at most all of the light through (A T <= 1) and
+ * nothing through an infinitely thick part. */
+static void test_walk4(const char *name, int kind, int slab_kind,
+                       const double (*measured)[3], size_t np,
+                       double fit_rms, double fit_worst)
 {
 	static const float albedos[] = {0.0f, 0.02f, 0.05f, 0.13f, 0.45f,
 	                                0.8f, 0.93f, 0.95f, 0.99f, 1.0f};
 	int same = 1, differs = 0, rising = 0, over = 0, bad = 0, n = 0;
+	char id[64];
 	for (size_t k = 0; k < sizeof albedos / sizeof *albedos; k++) {
-		sss_material m3 = walk(0, albedos[k]), m4 = walk(1, albedos[k]);
+		sss_material m3 = walk(slab_kind, albedos[k]);
+		sss_material m4 = walk(kind, albedos[k]);
 		m3.albedo[1] = m4.albedo[1] = 0.6f;
 		double s3[3], a3[3], z3[3], s4[3], a4[3], z4[3];
 		sss_transmission_slab(&m3, s3, a3, z3);
@@ -1030,30 +1044,32 @@ static void test_walk4(void)
 			}
 		}
 	}
-	CHECK("walk4.3x-unchanged", same, "3.x's slab is not the closed form");
-	CHECK("walk4.differs", differs > n / 2, "%d of %d differ", differs, n);
-	CHECK("walk4.monotone", rising == 0, "%d rising of %d", rising, n);
-	CHECK("walk4.energy", over == 0 && bad == 0, "%d over 1 / A, %d bad",
-	      over, bad);
+	snprintf(id, sizeof id, "%s.slab-unchanged", name);
+	CHECK(id, same, "the slab is not the closed form");
+	snprintf(id, sizeof id, "%s.differs", name);
+	CHECK(id, differs > n / 2, "%d of %d differ", differs, n);
+	snprintf(id, sizeof id, "%s.monotone", name);
+	CHECK(id, rising == 0, "%d rising of %d", rising, n);
+	snprintf(id, sizeof id, "%s.energy", name);
+	CHECK(id, over == 0 && bad == 0, "%d over 1 / A, %d bad", over, bad);
 
-	/* The measured points (tests/transmission4_measured.h). */
-	size_t np = sizeof walk4_measured / sizeof *walk4_measured;
+	/* The measured points (tests/transmission4_KIND_measured.h). */
 	double sum = 0.0, worst = 0.0;
 	for (size_t i = 0; i < np; i++) {
-		sss_material m = walk(1, (float)walk4_measured[i][0]);
+		sss_material m = walk(kind, (float)measured[i][0]);
 		double s[3], a[3], zb[3], T[3];
 		sss_transmission_slab(&m, s, a, zb);
 		double l = 1.5 * (a[0] - zb[0]);
-		sss_transmittance(&m, walk4_measured[i][1] * l, 1.0, T);
-		double e = fabs(log(T[0] / walk4_measured[i][2]));
+		sss_transmittance(&m, measured[i][1] * l, 1.0, T);
+		double e = fabs(log(T[0] / measured[i][2]));
 		sum += e * e;
 		worst = fmax(worst, e);
 	}
 	double rms = sqrt(sum / (double)np);
-	CHECK("walk4.measured", np > 50 && rms <= WALK4_FIT_RMS + 2e-3 &&
-	      worst <= WALK4_FIT_WORST + 2e-3, "%zu points: ln RMS %g "
-	      "(fit %g), largest %g (fit %g)", np, rms, WALK4_FIT_RMS, worst,
-	      WALK4_FIT_WORST);
+	snprintf(id, sizeof id, "%s.measured", name);
+	CHECK(id, np > 50 && rms <= fit_rms + 2e-3 && worst <= fit_worst + 2e-3,
+	      "%zu points: ln RMS %g (fit %g), largest %g (fit %g)", np, rms,
+	      fit_rms, worst, fit_worst);
 }
 
 int main(void)
@@ -1061,7 +1077,12 @@ int main(void)
 	test_slab();
 	test_reach_and_slab();
 	test_table();
-	test_walk4();
+	test_walk4("walk4", WALK_SKIN, WALK_3X, walk4_skin_measured,
+	           sizeof walk4_skin_measured / sizeof *walk4_skin_measured,
+	           WALK4_SKIN_FIT_RMS, WALK4_SKIN_FIT_WORST);
+	test_walk4("walk4rw", WALK_RW, WALK_RW_SLAB, walk4_rw_measured,
+	           sizeof walk4_rw_measured / sizeof *walk4_rw_measured,
+	           WALK4_RW_FIT_RMS, WALK4_RW_FIT_WORST);
 	test_models();
 	test_extremes();
 	test_validation();
