@@ -725,6 +725,103 @@ void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
 	}
 }
 
+/* The noise window of sss__transmission_light: 1 pixel each side, and
+ * the depth step (relative to the nearer) past which a neighbour is
+ * another surface. */
+#define LIGHT_WINDOW 1
+#define LIGHT_DEPTH_STEP 0.05f
+
+typedef struct {
+	const sss__transmission *t;
+	const int16_t *slot;
+	const sss_image *depth;
+	int32_t w, h;
+	const float *src;
+	float *dst;
+	int vertical;
+} light_ctx;
+
+static void light_fill_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const light_ctx *c = vctx;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < c->w; x++) {
+			size_t i = (size_t)y * c->w + x;
+			float *o = c->dst + 3 * i;
+			o[0] = o[1] = o[2] = 0.0f;
+			if (c->slot[i] >= 0)
+				sss__transmission_add(c->t, c->slot[i], x, y, o);
+		}
+}
+
+/* Whether the pixels i = (x, y) and j = (xx, yy) share the window: the
+ * same slot, and depths within LIGHT_DEPTH_STEP of the nearer (so the
+ * relation is symmetric). */
+static int light_shares(const light_ctx *c, size_t i, int32_t x, int32_t y,
+                        int32_t xx, int32_t yy)
+{
+	if (xx < 0 || yy < 0 || xx >= c->w || yy >= c->h)
+		return 0;
+	size_t j = (size_t)yy * c->w + xx;
+	if (c->slot[j] != c->slot[i])
+		return 0;
+	float zi = sss__at(c->depth, x, y)[0], zj = sss__at(c->depth, xx, yy)[0];
+	return fabsf(zj - zi) <= LIGHT_DEPTH_STEP * fminf(zi, zj);
+}
+
+/* One direction of the window. Each pixel's light is shared evenly among
+ * the pixels of its window (itself included) that share it, so no light
+ * is made or lost; in an even region that is the window's mean. */
+static void light_box_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const light_ctx *c = vctx;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < c->w; x++) {
+			size_t i = (size_t)y * c->w + x;
+			float *o = c->dst + 3 * i;
+			if (c->slot[i] < 0) {
+				o[0] = o[1] = o[2] = 0.0f;
+				continue;
+			}
+			double acc[3] = {0.0, 0.0, 0.0};
+			int any = 0;
+			for (int d = -LIGHT_WINDOW; d <= LIGHT_WINDOW; d++) {
+				int32_t xx = c->vertical ? x : x + d;
+				int32_t yy = c->vertical ? y + d : y;
+				if (!light_shares(c, i, x, y, xx, yy))
+					continue;
+				size_t j = (size_t)yy * c->w + xx;
+				int n = 0; /* the pixels j's light goes to */
+				for (int e = -LIGHT_WINDOW; e <= LIGHT_WINDOW; e++)
+					n += light_shares(c, j, xx, yy,
+					                  c->vertical ? xx : xx + e,
+					                  c->vertical ? yy + e : yy);
+				for (int ch = 0; ch < 3; ch++)
+					acc[ch] += c->src[3 * j + ch] / n;
+				any = 1;
+			}
+			if (!any) { /* its own depth is not finite: kept as it is */
+				memcpy(o, c->src + 3 * i, 3 * sizeof *o);
+				continue;
+			}
+			for (int ch = 0; ch < 3; ch++)
+				o[ch] = (float)acc[ch];
+		}
+}
+
+void sss__transmission_light(const sss__transmission *t,
+                             const int16_t *slot, const sss_image *depth,
+                             int32_t w, int32_t h, float *out, float *tmp,
+                             int32_t num_threads)
+{
+	light_ctx c = {t, slot, depth, w, h, NULL, out, 0};
+	sss__parallel_rows(h, num_threads, light_fill_rows, &c);
+	c.src = out, c.dst = tmp;
+	sss__parallel_rows(h, num_threads, light_box_rows, &c);
+	c.src = tmp, c.dst = out, c.vertical = 1;
+	sss__parallel_rows(h, num_threads, light_box_rows, &c);
+}
+
 void sss__transmission_free(sss__transmission *t)
 {
 	if (!t)
