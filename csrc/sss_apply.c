@@ -126,7 +126,6 @@ typedef struct rows_ctx {
 	const float *crease; /* what sharp edges carried (sss_crease.c), 3 a
 	                        pixel in the signal's units, or NULL */
 	const sss_image *out_combined, *out_diffuse_light;
-	const float *trans_light; /* sss__transmission_light, or NULL */
 } rows_ctx;
 
 /* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
@@ -282,11 +281,12 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				}
 				light[c] = l;
 			}
-			if (slot[i] >= 0 && ctx->trans_light) {
+			if (slot[i] >= 0 && ctx->transmission) {
 				/* back-lit light, after the blur: it crossed the part
 				 * and spread over its thickness, not over the radius
 				 * (transmission.md, "Not blurred") */
-				const float *t = ctx->trans_light + 3 * i;
+				float t[3] = {0.0f, 0.0f, 0.0f};
+				sss__transmission_add(ctx->transmission, slot[i], x, y, t);
 				for (int c = 0; c < 3; c++)
 					if (kernels[slot[i]].mix[c] > 0.0f)
 						light[c] += t[c];
@@ -646,15 +646,12 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	float *curvature = NULL; /* allocated below, once kernels tell */
 	float *crease = NULL;    /* likewise */
 	float *median_x = NULL;  /* likewise */
-	float *trans_light = transmission ? malloc(npix * 3 *
-	                                           sizeof *trans_light)
-	                                  : NULL;
 	if (!scratch)
 		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
 	                        sizeof *zrange);
 	if (!kernels || !by_index || !slot || !signal || !scratch || !zrange ||
-	    !method_of || (transmission && !trans_light)) {
+	    !method_of) {
 		r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working memory "
 		          "for a %dx%d image", w, h);
 		goto done;
@@ -704,11 +701,6 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		}
 	rc.curvature = curvature;
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
-	if (transmission) { /* the scratch image is free until the method */
-		sss__transmission_light(transmission, slot, &p->depth, w, h,
-		                        trans_light, scratch, opt.num_threads);
-		rc.trans_light = trans_light;
-	}
 	if (opt.crease && material_count > 0 &&
 	    (r = crease_before(&rc, &job, material_count, &opt, &crease))) {
 		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
@@ -760,7 +752,6 @@ done:
 	free(curvature);
 	free(crease);
 	free(median_x);
-	free(trans_light);
 	free(own_scratch);
 	free(zrange);
 	free(method_of);

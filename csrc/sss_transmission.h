@@ -27,17 +27,6 @@ sss_result sss__transmission_prepare(const sss_passes *p,
 void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
                            int32_t y, float light[3]);
 
-/* Every pixel's transmitted light (what sss__transmission_add adds to 0;
- * 0 where slot < 0), shared evenly over the 3x3 pixels around it of the
- * same slot and of a depth within 5 % (separably; no light made or lost):
- * out (3 floats a pixel, packed); tmp is as large, scratch. The light that crossed a part spreads over about
- * its thickness, which the back light's chords already hold; the window
- * only takes the back-light layer's sampling noise down. */
-void sss__transmission_light(const sss__transmission *t,
-                             const int16_t *slot, const sss_image *depth,
-                             int32_t w, int32_t h, float *out, float *tmp,
-                             int32_t num_threads);
-
 /* Whether material m takes back-lit light in this frame (t may be NULL). */
 int sss__transmission_active(const sss__transmission *t, int32_t m);
 
