@@ -73,6 +73,11 @@ typedef struct tmat {
 	double colour[3];
 	/* fast */
 	double distortion, power, scale, ambient;
+	/* T at thickness 0, made once: a baked back light (the slab's
+	 * attenuation in the light already) reads 0 at every pixel. Not for
+	 * the fast model, whose T follows the facing pass. */
+	int has_T0;
+	double T0[3];
 } tmat;
 
 struct sss__transmission {
@@ -681,8 +686,14 @@ sss_result sss__transmission_prepare(const sss_passes *p,
 	t->back_ind = p->back_ind;
 	t->thickness = p->thickness;
 	t->facing = p->facing;
-	for (int32_t m = 0; m < count; m++)
-		tmat_make(&materials[m], opt, unit_scale, &mats[m]);
+	for (int32_t m = 0; m < count; m++) {
+		tmat *mt = &mats[m];
+		tmat_make(&materials[m], opt, unit_scale, mt);
+		mt->has_T0 = mt->model != SSS_TRANSMISSION_OFF &&
+		             mt->model != SSS_TRANSMISSION_FAST;
+		if (mt->has_T0)
+			tmat_eval(mt, 0.0, 1.0, mt->T0);
+	}
 	*out = t;
 	return SSS_OK;
 }
@@ -717,7 +728,10 @@ void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
 	double tt = mt->thickness_scale == 0.0 ? 0.0
 	            : thick * mt->thickness_scale;
 	double T[3];
-	tmat_eval(mt, tt, facing, T);
+	if (tt == 0.0 && mt->has_T0)
+		memcpy(T, mt->T0, sizeof T);
+	else
+		tmat_eval(mt, tt, facing, T);
 	for (int c = 0; c < 3; c++) {
 		double v = (double)light[c] + T[c] * b[c];
 		if (isfinite(v) && fabs(v) <= 3.0e38)
