@@ -81,6 +81,9 @@ def parse_args():
     p.add_argument("--ref-samples", type=int, default=1024)
     p.add_argument("--rw-samples", default="4,8,16,64")
     p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--back-samples", type=int, default=0,
+                   help="the back-light layer's samples for ours (0: the "
+                        "scene's setting)")
     p.add_argument("--cache", help="where the reference renders are kept "
                    "(default: DIR/../cache)")
     p.add_argument("--summary", help="gather DIR/*/budget.json into "
@@ -244,6 +247,8 @@ def run(args):
     scene = compare.open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
     scene.cycles.samples = args.samples
+    if args.back_samples > 0:
+        scene.sss.transmission_samples = args.back_samples
     inp = os.path.join(work, f"off_{args.samples}_passes.exr")
     desc = os.path.join(work, f"off_{args.samples}_scene.json")
     out = os.path.join(work, f"off_{args.samples}_sss.exr")
