@@ -39,30 +39,17 @@ AVX2 static inline float lane_sum(__m256 v)
 
 /* One vector of samples s .. s + 7 read from the given row pointers
  * (already offset to sample s), lanes outside `lanes` masked off. */
-#define DENSE_STEP(rgb0, rgb1, rgb2, zp, gx, gy, gz, sp, lanes)                \
+#define DENSE_STEP(rgb0, rgb1, rgb2, zp, sp, lanes)                           \
 	do {                                                                      \
 		__m256 sf = _mm256_cvtepi32_ps(_mm256_add_epi32(                      \
 			_mm256_set1_epi32(s), iota));                                     \
-		__m256 q;                                                             \
-		if (geo) {                                                            \
-			__m256 dx = _mm256_sub_ps(_mm256_loadu_ps(gx), gcx);              \
-			__m256 dy = _mm256_sub_ps(_mm256_loadu_ps(gy), gcy);              \
-			__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(gz), gcz);              \
-			__m256 xt = _mm256_mul_ps(sf, upp);                               \
-			q = _mm256_sub_ps(                                                \
-				_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),            \
-				                            _mm256_mul_ps(dy, dy)),           \
-				              _mm256_mul_ps(dz, dz)),                         \
-				_mm256_mul_ps(xt, xt));                                       \
-		} else {                                                              \
-			__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(zp), zc);               \
-			__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(    \
-				_mm256_set1_epi32(b->i + s), iota)), off);                    \
-			__m256 e = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);             \
-			__m256 xt2 = _mm256_mul_ps(sf, two_xt);                           \
-			q = _mm256_add_ps(_mm256_mul_ps(e, _mm256_add_ps(e, xt2)),        \
-			                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));      \
-		}                                                                     \
+		__m256 dz = _mm256_sub_ps(_mm256_loadu_ps(zp), zc);                   \
+		__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(        \
+			_mm256_set1_epi32(b->i + s), iota)), off);                        \
+		__m256 e = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);                 \
+		__m256 xt2 = _mm256_mul_ps(sf, two_xt);                               \
+		__m256 q = _mm256_add_ps(_mm256_mul_ps(e, _mm256_add_ps(e, xt2)),     \
+		                         _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));   \
 		q = _mm256_max_ps(q, zero); /* NaN -> 0, as in sss__blur1d_q */       \
 		__m256i slots = _mm256_loadu_si256(                                   \
 			(const __m256i *)(const void *)(sp));                             \
@@ -101,23 +88,15 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 	const __m256i all = _mm256_set1_epi32(-1);
 	const __m256 zc = _mm256_set1_ps(b->zc), off = _mm256_set1_ps(b->off_axis);
 	const __m256 ife = _mm256_set1_ps(b->ife), two_xt = _mm256_set1_ps(b->two_xt);
-	const __m256 cz = _mm256_set1_ps(b->cz), upp = _mm256_set1_ps(b->upp);
-	const __m256 gcx = _mm256_set1_ps(b->gc[0]), gcy = _mm256_set1_ps(b->gc[1]),
-	             gcz = _mm256_set1_ps(b->gc[2]);
-	const int geo = b->geo[0] != NULL;
+	const __m256 cz = _mm256_set1_ps(b->cz);
 	const float *r0 = b->rgb[0] + b->i, *r1 = b->rgb[1] + b->i,
-	            *r2 = b->rgb[2] + b->i, *zr = geo ? NULL : b->z + b->i;
-	const float *g0 = geo ? b->geo[0] + b->i : NULL,
-	            *g1 = geo ? b->geo[1] + b->i : NULL,
-	            *g2 = geo ? b->geo[2] + b->i : NULL;
+	            *r2 = b->rgb[2] + b->i, *zr = b->z + b->i;
 	const int32_t *sr = b->slot + b->i;
 	__m256 acc0 = zero, acc1 = zero, acc2 = zero;
 	__m256 ws0 = zero, ws1 = zero, ws2 = zero;
 	int32_t s = b->s_lo;
 	for (; s + SSS__LANES - 1 <= b->s_hi; s += SSS__LANES)
-		DENSE_STEP(r0 + s, r1 + s, r2 + s, geo ? NULL : zr + s,
-		           geo ? g0 + s : NULL, geo ? g1 + s : NULL,
-		           geo ? g2 + s : NULL, sr + s, all);
+		DENSE_STEP(r0 + s, r1 + s, r2 + s, zr + s, sr + s, all);
 	if (s <= b->s_hi) {
 		/* A short last vector reads on past the row where the arrays
 		 * allow (the lanes are masked off) and otherwise goes through a
@@ -125,23 +104,18 @@ AVX2 void sss__blur1d_avx2(sss__blur1d *b)
 		int32_t n = b->s_hi - s + 1, j = b->i + s;
 		__m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(n), iota);
 		if (j + SSS__LANES <= b->readable) {
-			DENSE_STEP(r0 + s, r1 + s, r2 + s, geo ? NULL : zr + s,
-			           geo ? g0 + s : NULL, geo ? g1 + s : NULL,
-			           geo ? g2 + s : NULL, sr + s, lanes);
+			DENSE_STEP(r0 + s, r1 + s, r2 + s, zr + s, sr + s, lanes);
 		} else {
-			float st[7][SSS__LANES];
+			float st[4][SSS__LANES];
 			int32_t slot_t[SSS__LANES];
 			for (int l = 0; l < SSS__LANES; l++) {
 				int in = l < n;
-				for (int c = 0; c < 3; c++) {
+				for (int c = 0; c < 3; c++)
 					st[c][l] = in ? b->rgb[c][j + l] : 0.0f;
-					st[3 + c][l] = in && geo ? b->geo[c][j + l] : b->gc[c];
-				}
-				st[6][l] = in && !geo ? b->z[j + l] : b->zc;
+				st[3][l] = in ? b->z[j + l] : b->zc;
 				slot_t[l] = in ? b->slot[j + l] : -2;
 			}
-			DENSE_STEP(st[0], st[1], st[2], st[6], st[3], st[4], st[5],
-			           slot_t, lanes);
+			DENSE_STEP(st[0], st[1], st[2], st[3], slot_t, lanes);
 		}
 	}
 	b->acc[0] = lane_sum(acc0);
@@ -168,8 +142,7 @@ AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t,
 	const __m256i slot_c = _mm256_set1_epi32(b->slot_c);
 	const __m256 zc = _mm256_set1_ps(b->zc), off = _mm256_set1_ps(b->off_axis);
 	const __m256 ife = _mm256_set1_ps(b->ife), two_xt = _mm256_set1_ps(b->two_xt);
-	const __m256 cz = _mm256_set1_ps(b->cz), upp = _mm256_set1_ps(b->upp);
-	const int geo = b->geo[0] != NULL;
+	const __m256 cz = _mm256_set1_ps(b->cz);
 	__m256 acc[3] = {zero, zero, zero}, ws[3] = {zero, zero, zero};
 	for (int32_t k = v0 * SSS__LANES; k < v1 * SSS__LANES; k += SSS__LANES) {
 		__m256 o = _mm256_mul_ps(_mm256_loadu_ps(t->at + k), r);
@@ -185,28 +158,12 @@ AVX2 void sss__blur1d_taps_avx2(sss__blur1d *b, const sss__taps *t,
 			j = _mm256_min_epi32(_mm256_max_epi32(j, _mm256_setzero_si256()),
 			                     last);
 			__m256 sf = _mm256_cvtepi32_ps(_mm256_sub_epi32(j, centre));
-			__m256 q;
-			if (geo) {
-				__m256 dx = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[0], j, 4),
-				                          _mm256_set1_ps(b->gc[0]));
-				__m256 dy = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[1], j, 4),
-				                          _mm256_set1_ps(b->gc[1]));
-				__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->geo[2], j, 4),
-				                          _mm256_set1_ps(b->gc[2]));
-				__m256 xt = _mm256_mul_ps(sf, upp);
-				q = _mm256_sub_ps(
-					_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx),
-					                            _mm256_mul_ps(dy, dy)),
-					              _mm256_mul_ps(dz, dz)),
-					_mm256_mul_ps(xt, xt));
-			} else {
-				__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->z, j, 4), zc);
-				__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(j), off);
-				__m256 ee = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);
-				__m256 xt2 = _mm256_mul_ps(sf, two_xt);
-				q = _mm256_add_ps(_mm256_mul_ps(ee, _mm256_add_ps(ee, xt2)),
-				                  _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));
-			}
+			__m256 dz = _mm256_sub_ps(_mm256_i32gather_ps(b->z, j, 4), zc);
+			__m256 xs = _mm256_add_ps(_mm256_cvtepi32_ps(j), off);
+			__m256 ee = _mm256_mul_ps(_mm256_mul_ps(dz, xs), ife);
+			__m256 xt2 = _mm256_mul_ps(sf, two_xt);
+			__m256 q = _mm256_add_ps(_mm256_mul_ps(ee, _mm256_add_ps(ee, xt2)),
+			                         _mm256_mul_ps(_mm256_mul_ps(dz, dz), cz));
 			q = _mm256_max_ps(q, zero);
 			__m256i same = _mm256_cmpeq_epi32(
 				_mm256_i32gather_epi32((const int *)(const void *)b->slot, j, 4),

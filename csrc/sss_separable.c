@@ -285,7 +285,6 @@ typedef struct plane {
 	int32_t len, rows;
 	float *rgb[3];         /* planar light, 0 where nothing scatters */
 	float *z;              /* depth */
-	float *geo[3];         /* positions (Position pass), or NULL */
 	int32_t *slot;         /* the job's, widened for the vector loop */
 } plane;
 
@@ -427,10 +426,8 @@ static void row_template(const pass_ctx *ctx, int32_t row, sss__blur1d *b)
 	size_t base = (size_t)row * pl->len;
 	double perp = (row + 0.5 - ax->c_perp) / ax->f_perp;
 	memset(b, 0, sizeof *b);
-	for (int c = 0; c < 3; c++) {
+	for (int c = 0; c < 3; c++)
 		b->rgb[c] = pl->rgb[c] + base;
-		b->geo[c] = pl->geo[c] ? pl->geo[c] + base : NULL;
-	}
 	b->z = pl->z + base;
 	b->slot = pl->slot + base;
 	b->readable = (int64_t)pl->len * (pl->rows - row);
@@ -438,7 +435,6 @@ static void row_template(const pass_ctx *ctx, int32_t row, sss__blur1d *b)
 	b->off_axis = (float)(0.5 - ax->c);
 	b->ife = ax->ortho ? 0.0f : (float)(1.0 / ax->f);
 	b->two_xt = (float)(2.0 / ax->f);
-	b->upp = (float)(1.0 / ax->f);
 	b->cz = ax->ortho ? 1.0f : (float)(1.0 + perp * perp);
 }
 
@@ -506,13 +502,8 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 	b->r = (float)r;
 	b->zc = zc;
 	b->cut_q = t->cut_q;
-	if (!ax->ortho) {
+	if (!ax->ortho)
 		b->two_xt = zc * row->two_xt;
-		b->upp = zc * row->upp;
-	}
-	if (b->geo[0])
-		for (int c = 0; c < 3; c++)
-			b->gc[c] = b->geo[c][i];
 
 	if (kind == DENSE) {
 		double fj = (r - 1.0) * R_STEPS;
@@ -702,7 +693,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 }
 
 /* Rows y0..y1 of both planes from the job, scattering pixels only: planar
- * light, depth and positions, and their transposes for the second pass. */
+ * light and depth, and their transposes for the second pass. */
 static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 {
 	const pass_ctx *ctx = vctx;
@@ -732,12 +723,6 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 					                      (int64_t)x * job->depth_channels];
 				out->z[o] = in->z[i];
 				out->slot[o] = slot;
-				if (in->geo[0]) {
-					const float *p = job->position + y * job->position_stride +
-					                 (int64_t)x * job->position_channels;
-					for (int c = 0; c < 3; c++)
-						in->geo[c][i] = out->geo[c][o] = p[c];
-				}
 			}
 	}
 }
@@ -909,21 +894,20 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 		return SSS_OK;
 
 	sss_result r = SSS_ERR_OUT_OF_MEMORY;
-	int geo = job->position != NULL;
 	int copy_z = !(job->depth_channels == 1 && job->depth_stride == w);
 	/* The light's planes are the job's signal (planar for this method,
 	 * 0 where nothing scatters); the rest starts as zeros (calloc: pages
 	 * nobody touches cost nothing) and only scattering pixels are
 	 * written: the work and the memory follow the coverage. A sample on
-	 * another material is masked off, but must be finite: 0 is. */
+	 * another material is masked off, but must be finite: 0 is. Distances
+	 * come from depth (sss__blur1d_q), so a Position pass is not read. */
 	table *tables = calloc((size_t)count, sizeof *tables);
-	plane hp = {w, h, {NULL}, NULL, {NULL}, NULL};
-	plane vp = {h, w, {NULL}, NULL, {NULL}, NULL};
-	size_t hn = (size_t)copy_z + (geo ? 3 : 0), vn = geo ? 4 : 1;
-	float *hbuf = hn ? calloc(npix * hn, sizeof *hbuf) : NULL;
-	float *vbuf = calloc(npix * vn, sizeof *vbuf);
+	plane hp = {w, h, {NULL}, NULL, NULL};
+	plane vp = {h, w, {NULL}, NULL, NULL};
+	float *hbuf = copy_z ? calloc(npix, sizeof *hbuf) : NULL;
+	float *vbuf = calloc(npix, sizeof *vbuf);
 	int32_t *slots = malloc(2 * npix * sizeof *slots);
-	if (!tables || (hn && !hbuf) || !vbuf || !slots)
+	if (!tables || (copy_z && !hbuf) || !vbuf || !slots)
 		goto done;
 	/* The transposed light lives in the job's scratch image (fill_rows
 	 * clears it). */
@@ -935,11 +919,6 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	hp.slot = slots;
 	vp.slot = slots + npix;
 	hp.z = copy_z ? hbuf : (float *)job->depth;
-	if (geo)
-		for (int c = 0; c < 3; c++) {
-			hp.geo[c] = hbuf + ((size_t)copy_z + c) * npix;
-			vp.geo[c] = vbuf + (1 + c) * npix;
-		}
 
 	if ((r = scan_half_widths(job, ax, tables, count, num_threads)))
 		goto done;
