@@ -64,6 +64,8 @@ typedef struct crease_ctx {
 	                                 crease, or -1 */
 	int32_t tiles_x, tiles_y;
 	const int32_t *tile_first;    /* tiles_x * tiles_y + 1 offsets */
+	const int32_t *tile_sat;      /* (tiles_y + 1) x (tiles_x + 1): the
+	                                 sources in the tiles above and left */
 	const crease_source *sources; /* by tile */
 	float *extra;                 /* 3 per pixel, packed */
 	double u_node[CREASE_TABLE];  /* Burley d = 1 */
@@ -409,6 +411,7 @@ static double face_extent(const crease_ctx *ctx, int32_t x, int32_t y,
  * its face (a pixel filter blends the crease pixel itself with the other
  * face). */
 static sss_result list_sources(crease_ctx *ctx, int32_t **first_out,
+                               int32_t **sat_out,
                                crease_source **sources_out)
 {
 	const sss__job *job = ctx->job;
@@ -417,8 +420,13 @@ static sss_result list_sources(crease_ctx *ctx, int32_t **first_out,
 	ctx->tiles_y = (h + CREASE_TILE - 1) / CREASE_TILE;
 	size_t tiles = (size_t)ctx->tiles_x * ctx->tiles_y;
 	int32_t *first = calloc(tiles + 1, sizeof *first);
-	if (!first)
+	int32_t *sat = calloc((size_t)(ctx->tiles_x + 1) * (ctx->tiles_y + 1),
+	                      sizeof *sat);
+	if (!first || !sat) {
+		free(first);
+		free(sat);
 		return SSS_ERR_OUT_OF_MEMORY;
+	}
 	size_t count = 0;
 	for (int32_t y = 0; y < h; y++)
 		for (int32_t x = 0; x < w; x++)
@@ -427,12 +435,20 @@ static sss_result list_sources(crease_ctx *ctx, int32_t **first_out,
 				      x / CREASE_TILE + 1]++;
 				count++;
 			}
+	size_t sw = (size_t)ctx->tiles_x + 1;
+	for (int32_t ty = 0; ty < ctx->tiles_y; ty++)
+		for (int32_t tx = 0; tx < ctx->tiles_x; tx++)
+			sat[(ty + 1) * sw + tx + 1] =
+			        first[(size_t)ty * ctx->tiles_x + tx + 1] +
+			        sat[ty * sw + tx + 1] + sat[(ty + 1) * sw + tx] -
+			        sat[ty * sw + tx];
 	for (size_t t = 0; t < tiles; t++)
 		first[t + 1] += first[t];
 	crease_source *src = malloc((count ? count : 1) * sizeof *src);
 	int32_t *fill = malloc((tiles ? tiles : 1) * sizeof *fill);
 	if (!src || !fill) {
 		free(first);
+		free(sat);
 		free(src);
 		free(fill);
 		return SSS_ERR_OUT_OF_MEMORY;
@@ -469,6 +485,7 @@ static sss_result list_sources(crease_ctx *ctx, int32_t **first_out,
 		}
 	free(fill);
 	*first_out = first;
+	*sat_out = sat;
 	*sources_out = src;
 	return SSS_OK;
 }
@@ -491,12 +508,12 @@ static void window_tiles(const crease_ctx *ctx, int32_t x, int32_t y,
 static int32_t sources_near(const crease_ctx *ctx, int32_t x, int32_t y,
                             int32_t r)
 {
-	int32_t tx0, ty0, tx1, ty1, listed = 0;
+	int32_t tx0, ty0, tx1, ty1;
 	window_tiles(ctx, x, y, r, &tx0, &ty0, &tx1, &ty1);
-	for (int32_t ty = ty0; ty <= ty1; ty++)
-		listed += ctx->tile_first[(size_t)ty * ctx->tiles_x + tx1 + 1] -
-		          ctx->tile_first[(size_t)ty * ctx->tiles_x + tx0];
-	return listed;
+	const int32_t *sat = ctx->tile_sat;
+	size_t sw = (size_t)ctx->tiles_x + 1;
+	return sat[(ty1 + 1) * sw + tx1 + 1] - sat[ty0 * sw + tx1 + 1] -
+	       sat[(ty1 + 1) * sw + tx0] + sat[ty0 * sw + tx0];
 }
 
 static void crease_rows(void *vctx, int32_t y0, int32_t y1)
@@ -539,19 +556,24 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 			int32_t r = reach_px(ctx, CREASE_REACH * dmax, pix);
 			int32_t tx0, ty0, tx1, ty1;
 			window_tiles(ctx, x, y, r, &tx0, &ty0, &tx1, &ty1);
-			/* A window with many sources reads every thin-th: an average
-			 * along the edges over about CREASE_SOURCES of them. */
+			/* A window with many sources reads every thin-th of each
+			 * tile's: an average along the edges over about
+			 * CREASE_SOURCES of them. A row of tiles holds its sources in
+			 * one run: its empty tiles cost nothing. */
 			int32_t listed = sources_near(ctx, x, y, r);
 			if (!listed)
 				continue;
 			int32_t thin = listed > 2 * CREASE_SOURCES
 			               ? listed / CREASE_SOURCES : 1;
 			double W = 0.0, WT = 0.0, WS = 0.0, WL[3] = {0};
-			for (int32_t ty = ty0; ty <= ty1; ty++)
-				for (int32_t tx = tx0; tx <= tx1; tx++) {
-					size_t t = (size_t)ty * ctx->tiles_x + tx;
-					for (int32_t e = ctx->tile_first[t];
-					     e < ctx->tile_first[t + 1]; e += thin) {
+			for (int32_t ty = ty0; ty <= ty1; ty++) {
+				size_t t0 = (size_t)ty * ctx->tiles_x;
+				int32_t run1 = ctx->tile_first[t0 + tx1 + 1];
+				int32_t e = ctx->tile_first[t0 + tx0];
+				while (e < run1) {
+					int32_t end = ctx->tile_first[t0 + ctx->sources[e].x /
+					                                   CREASE_TILE + 1];
+					for (; e < end; e += thin) {
 						const crease_source *src = &ctx->sources[e];
 						if (abs(src->x - x) > r || abs(src->y - y) > r ||
 						    (src->x == x && src->y == y))
@@ -588,7 +610,9 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 						for (int c = 0; c < 3; c++)
 							WL[c] += wgt * src->light[c];
 					}
+					e = end;
 				}
+			}
 			if (!(W > 0.0))
 				continue;
 			double tm = WT / W, face = WS / W;
@@ -650,7 +674,7 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 	float *nrm = malloc(npix * 3 * sizeof *nrm);
 	int8_t *across = malloc(npix * sizeof *across);
 	uint8_t *near = malloc(npix);
-	int32_t *first = NULL;
+	int32_t *first = NULL, *sat = NULL;
 	crease_source *sources = NULL;
 	sss_result r = ctx && pos && nrm && across && near && reach
 	               ? SSS_OK : SSS_ERR_OUT_OF_MEMORY;
@@ -671,14 +695,16 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		mark_near(ctx);
 		sss__parallel_rows(job->height, num_threads, normal_rows, ctx);
 		sss__parallel_rows(job->height, num_threads, detect_rows, ctx);
-		r = list_sources(ctx, &first, &sources);
+		r = list_sources(ctx, &first, &sat, &sources);
 	}
 	if (!r && bent && first[(size_t)ctx->tiles_x * ctx->tiles_y] > 0) {
 		ctx->tile_first = first;
+		ctx->tile_sat = sat;
 		ctx->sources = sources;
 		sss__parallel_rows(job->height, num_threads, crease_rows, ctx);
 	}
 	free(first);
+	free(sat);
 	free(sources);
 	free(reach);
 	free(near);
