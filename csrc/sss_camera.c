@@ -205,10 +205,11 @@ static void scaled_point(const sss__projection *p, int32_t x, int32_t y,
 /* The step from pixel (x, y) to its neighbour along one axis, on the side
  * whose depth is nearer its own (so that a silhouette is not read as a
  * slope), from neighbours of the same slot only; 0 when neither is. */
-static inline int surface_step(const sss_image *depth, const int16_t *slot,
-                        const sss__projection *p, int32_t w, int32_t h,
-                        int32_t x, int32_t y, int dx, int dy,
-                        const double here[3], double step[3])
+static inline int surface_step(const sss_image *depth,
+                               const int16_t *slot,
+                               const sss__projection *p, int32_t w,
+                               int32_t h, int32_t x, int32_t y, int dx,
+                               int dy, const double here[3], double step[3])
 {
 	double best = INFINITY;
 	int found = 0;
