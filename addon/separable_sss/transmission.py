@@ -330,7 +330,7 @@ def _override_material(distance, undo, need_ao=True, view=None, images=()):
     tree.links.new(lit.outputs["Color"], bsdf.inputs["Color"])
 
     aov = tree.nodes.new("ShaderNodeOutputAOV")
-    aov.name = THICKNESS_AOV        # in 3.4 the node's name is its AOV
+    compat.set_aov_output(aov, THICKNESS_AOV)
     aov.inputs["Value"].default_value = 0.0
     if need_ao:
         # The AO node runs at every shading point of every path, so its
@@ -346,7 +346,7 @@ def _override_material(distance, undo, need_ao=True, view=None, images=()):
         keep = _math(tree, "LESS_THAN", mode, 1.5)
         tree.links.new(_math(tree, "MULTIPLY", sq, keep), aov.inputs["Value"])
     facing = tree.nodes.new("ShaderNodeOutputAOV")
-    facing.name = FACING_AOV
+    compat.set_aov_output(facing, FACING_AOV)
     tree.links.new(dot.outputs["Value"], facing.inputs["Value"])
     for node in tree.nodes:
         node.label = TAG

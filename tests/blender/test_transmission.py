@@ -94,6 +94,28 @@ def test_backlit_slab_brighter_and_closer_to_random_walk(slab, tmp_path):
     assert abs(on @ lum - ref @ lum) < 0.4 * (ref @ lum)
 
 
+def test_thickness_and_facing_reach_the_pass_file(slab, tmp_path):
+    """The back-light layer's AOVs reach the pass file on every Blender:
+    the thickness every model but the baked slab reads, and the facing the
+    fast model's view term reads. An AOV Output node names its AOV by its
+    node name in 3.4 and by aov_name from 4.0 on (compat.set_aov_output):
+    named the 3.4 way, 4.5 and 5.0 wrote both as 0 everywhere."""
+    scene = open_scene(slab, tmp_path)
+    mat = bpy.data.materials["Skin"]
+    mat.sss.transmission = "FAST"
+    mat.sss.transmission_distance = 0.05  # farther than the 1.5 cm slab
+    job = pipeline.prepare_render(bpy.context)
+    inp = read_channels(job.input_exr)[0]
+    mask = np.rint(inp["ViewLayer.IndexMA.X"]) > 0
+    layer = transmission.LAYER
+    sq = inp[f"{layer}.{transmission.THICKNESS_AOV}.X"][mask]
+    facing = inp[f"{layer}.{transmission.FACING_AOV}.X"][mask]
+    thick = float(np.median(np.sqrt(np.maximum(sq, 0.0))))
+    print("slab: median thickness", thick, "facing", np.median(facing))
+    assert abs(thick - 0.015) < 0.005
+    assert np.median(facing) > 0.9
+
+
 def test_restored_after_success(slab, tmp_path):
     scene = open_scene(slab, tmp_path)
     before = state(scene)
