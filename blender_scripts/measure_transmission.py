@@ -22,6 +22,7 @@ percentile there. Writes results.txt, results.json and sheet.png
 |error| maps below, same exposure)."""
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -66,6 +67,11 @@ def parse_args():
                    "(RANDOM_WALK_SKIN, RANDOM_WALK; the add-on's names: "
                    "3.x's Random Walk is RANDOM_WALK_SKIN) instead of the "
                    "scene's")
+    p.add_argument("--slab-light", default="back", choices=("back", "front"),
+                   help="slab mode: lit only from behind (transmission, "
+                   "the default), or only from the front, by a sun along "
+                   "the view (reflectance against thickness: the walk's "
+                   "light over the library's without transmission)")
     p.add_argument("--model", default="BURLEY",
                    help="transmission model for materials that have it off "
                    "(the add-on's default): BURLEY, JIMENEZ, BEER_LAMBERT, "
@@ -108,6 +114,61 @@ def write_png(path, img):
     out.close()
 
 
+def light_from_the_front(scene):
+    """The slab lit only from the front: its lights gone, a sun along the
+    view (the camera looks along +Y at the slab's face)."""
+    for obj in list(scene.objects):
+        if obj.type == "LIGHT":
+            bpy.data.objects.remove(obj)
+    data = bpy.data.lights.new("Front", "SUN")
+    data.energy = 3.0
+    sun = bpy.data.objects.new("Front", data)
+    scene.collection.objects.link(sun)
+    sun.rotation_euler = (math.pi / 2, 0.0, 0.0)  # shining along +Y
+
+
+def front_row(args, work, tag, thick, sub, desc, ref, mask, lum):
+    """One thickness of the front-lit slab: the walk's light and the
+    library's (transmission off: nothing comes from behind) over the
+    middle of the slab, and their ratio per channel."""
+    from separable_sss import native
+    d = json.loads(json.dumps(desc))
+    for mm in d["materials"]:
+        mm["transmission"] = "off"
+    jp = os.path.join(work, f"{tag}_front.json")
+    with open(jp, "w") as f:
+        json.dump(d, f, indent=1)
+    out = os.path.join(work, f"{tag}_front.exr")
+    with native.Scene(jp) as sc:
+        sc.process(os.path.join(work, f"{tag}_off.exr"), out,
+                   layer="ViewLayer")
+    ours = rgb(read_exr(out), "SSS.Combined")[mask].mean(0)
+    row = dict(thickness=thick, subsurface=sub,
+               material=d["materials"][0], rw=ref.tolist(),
+               model=ours.tolist(), rw_lum=float(ref @ lum),
+               model_lum=float(ours @ lum),
+               rw_over_model=(ref / ours).tolist())
+    print("slab", json.dumps(row), flush=True)
+    return row
+
+
+def write_front_rows(args, rows):
+    lines = ["| thickness (cm) | Subsurface | random walk R, G, B | library "
+             "R, G, B | walk / library R, G, B |", "|" + "---|" * 5]
+    for r in rows:
+        lines.append(
+            f"| {100 * r['thickness']:g} | {r['subsurface']:g} | " +
+            ", ".join(f"{v:.3f}" for v in r["rw"]) + " | " +
+            ", ".join(f"{v:.3f}" for v in r["model"]) + " | " +
+            ", ".join(f"{v:.3f}" for v in r["rw_over_model"]) + " |")
+    text = "\n".join(lines)
+    print(text)
+    with open(os.path.join(args.out, "slab_front.md"), "w") as f:
+        f.write(text + "\n")
+    with open(os.path.join(args.out, "slab_front.json"), "w") as f:
+        json.dump(rows, f, indent=1)
+
+
 def slab_sweep(args):
     """Front brightness of the back-lit slab at several thicknesses and
     radii: random walk against the library (blur alone and with
@@ -132,6 +193,8 @@ def slab_sweep(args):
             means = {}
             for kind in ("rw", "off"):
                 scene = open_scene(args)
+                if args.slab_light == "front":
+                    light_from_the_front(scene)
                 slab = scene.objects["Cube"]
                 slab.scale[1] = thick
                 mat = bpy.data.materials["Skin"]
@@ -171,6 +234,10 @@ def slab_sweep(args):
             m &= idx
             ref = rgb(read_exr(os.path.join(work, f"{tag}_rw.exr")),
                       "ViewLayer.Combined")
+            if args.slab_light == "front":
+                rows.append(front_row(args, work, tag, thick, sub, desc,
+                                      ref[m].mean(0), m, lum))
+                continue
             for on in (False, True):
                 d = json.loads(json.dumps(desc))
                 if not on:
@@ -206,6 +273,8 @@ def slab_sweep(args):
                        t_model=((means[True] - means[False]) / bd).tolist())
             rows.append(row)
             print("slab", json.dumps(row), flush=True)
+    if args.slab_light == "front":
+        return write_front_rows(args, rows)
     lines = ["| thickness (cm) | Subsurface | random walk R, G, B (lum.) | "
              "blur alone (lum.) | model R, G, B (lum.) | model / rw |",
              "|" + "---|" * 6]
