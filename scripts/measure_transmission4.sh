@@ -4,10 +4,13 @@
 # slab mode), for scripts/fit_transmission4.py:
 #
 #   sh scripts/measure_transmission4.sh BLENDER OUT [RESOLUTION] [RW_SPP] \
-#       [METHOD] [SETS]
+#       [METHOD] [SETS] [LIGHT]
 #
 # METHOD: RANDOM_WALK_SKIN (the default) or RANDOM_WALK (4.x's plain Random
-# Walk, the default of a new material); SETS: which of a - e to run (all).
+# Walk, the default of a new material); SETS: which of a - e to run (all);
+# LIGHT: back (the default: transmission, slab.json) or front (the same
+# slabs lit only from the front: reflected light against thickness,
+# slab_front.json).
 #
 # Four slab colours, each channel's albedo paired with a radius (the slab's
 # 1, 0.5, 0.25 times Subsurface) so that the three mean free paths are
@@ -20,6 +23,7 @@ res=${3:-64x64}
 spp=${4:-1024}
 method=${5:-RANDOM_WALK_SKIN}
 sets=${6:-abcde}
+light=${7:-back}
 root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 "$blender" -b --factory-startup --python-exit-code 1 \
@@ -37,7 +41,7 @@ run() {
 		--python "$root/blender_scripts/measure_transmission.py" -- \
 		--scene "$out/slab.blend" --out "$out/$name" --slab-sweep "$ts" \
 		--slab-subsurface "$sub" --slab-albedo "$albedo" \
-		--slab-method "$method" \
+		--slab-method "$method" --slab-light "$light" \
 		--resolution "$res" --rw-samples "$spp" --samples 128 \
 		>"$out/$name.log" 2>&1 || { tail -n 30 "$out/$name.log"; exit 1; }
 }
