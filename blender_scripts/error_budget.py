@@ -99,6 +99,9 @@ def parse_args():
         args.rw_samples = sorted({int(x) for x in args.rw_samples.split(",")})
     except ValueError as e:
         p.error(f"--resolution or --rw-samples: {e}")
+    if args.back_samples < 0:
+        p.error(f"--back-samples {args.back_samples}: must be 0 (the "
+                "scene's setting) or more")
     args.scene = os.path.abspath(args.scene)
     args.out = os.path.abspath(args.out)
     args.name = args.name or os.path.splitext(os.path.basename(

@@ -127,22 +127,30 @@ def light_from_the_front(scene):
     sun.rotation_euler = (math.pi / 2, 0.0, 0.0)  # shining along +Y
 
 
-def front_row(args, work, tag, thick, sub, desc, ref, mask, lum):
-    """One thickness of the front-lit slab: the walk's light and the
-    library's (transmission off: nothing comes from behind) over the
-    middle of the slab, and their ratio per channel."""
+def scatter_slab(work, tag, desc, on, mask):
+    """The library on one slab's SSS-off passes with its description,
+    transmission on or off: the mean SSS.Combined over mask, and the
+    description as run."""
     from separable_sss import native
     d = json.loads(json.dumps(desc))
-    for mm in d["materials"]:
-        mm["transmission"] = "off"
-    jp = os.path.join(work, f"{tag}_front.json")
+    if not on:
+        for mm in d["materials"]:
+            mm["transmission"] = "off"
+    jp = os.path.join(work, f"{tag}_{int(on)}.json")
     with open(jp, "w") as f:
         json.dump(d, f, indent=1)
-    out = os.path.join(work, f"{tag}_front.exr")
+    out = os.path.join(work, f"{tag}_sss{int(on)}.exr")
     with native.Scene(jp) as sc:
         sc.process(os.path.join(work, f"{tag}_off.exr"), out,
                    layer="ViewLayer")
-    ours = rgb(read_exr(out), "SSS.Combined")[mask].mean(0)
+    return rgb(read_exr(out), "SSS.Combined")[mask].mean(0), d
+
+
+def front_row(work, tag, thick, sub, desc, ref, mask, lum):
+    """One thickness of the front-lit slab: the walk's light and the
+    library's (transmission off: nothing comes from behind) over the
+    middle of the slab, and their ratio per channel."""
+    ours, d = scatter_slab(work, tag, desc, False, mask)
     row = dict(thickness=thick, subsurface=sub,
                material=d["materials"][0], rw=ref.tolist(),
                model=ours.tolist(), rw_lum=float(ref @ lum),
@@ -235,22 +243,11 @@ def slab_sweep(args):
             ref = rgb(read_exr(os.path.join(work, f"{tag}_rw.exr")),
                       "ViewLayer.Combined")
             if args.slab_light == "front":
-                rows.append(front_row(args, work, tag, thick, sub, desc,
+                rows.append(front_row(work, tag, thick, sub, desc,
                                       ref[m].mean(0), m, lum))
                 continue
             for on in (False, True):
-                d = json.loads(json.dumps(desc))
-                if not on:
-                    for mm in d["materials"]:
-                        mm["transmission"] = "off"
-                jp = os.path.join(work, f"{tag}_{int(on)}.json")
-                with open(jp, "w") as f:
-                    json.dump(d, f, indent=1)
-                out = os.path.join(work, f"{tag}_sss{int(on)}.exr")
-                with native.Scene(jp) as sc:
-                    sc.process(os.path.join(work, f"{tag}_off.exr"), out,
-                               layer="ViewLayer")
-                means[on] = rgb(read_exr(out), "SSS.Combined")[m].mean(0)
+                means[on], _ = scatter_slab(work, tag, desc, on, m)
             b = rgb(ch, f"{transmission.LAYER}.DiffDir") + \
                 rgb(ch, f"{transmission.LAYER}.DiffInd")
             dc = rgb(ch, "ViewLayer.DiffCol")
