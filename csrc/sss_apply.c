@@ -76,32 +76,6 @@ static float *packed_output(const sss_image *a, const sss_image *b)
 	return NULL;
 }
 
-static void add_scaled(float *acc, const sss_image *light_a,
-                       const sss_image *light_b, const sss_image *colour,
-                       int32_t x, int32_t y)
-{
-	if (!colour->data || (!light_a->data && !light_b->data))
-		return;
-	const float *c = sss__at(colour, x, y);
-	for (int k = 0; k < 3; k++) {
-		float l = 0.0f;
-		if (light_a->data)
-			l += sss__at(light_a, x, y)[k];
-		if (light_b->data)
-			l += sss__at(light_b, x, y)[k];
-		acc[k] += l * c[k];
-	}
-}
-
-static void add_plain(float *acc, const sss_image *im, int32_t x, int32_t y)
-{
-	if (!im->data)
-		return;
-	const float *v = sss__at(im, x, y);
-	for (int k = 0; k < 3; k++)
-		acc[k] += v[k];
-}
-
 /* The per-pixel work before and after the blur, on row chunks in
  * parallel (sss__parallel_rows): every pixel only reads the passes and
  * writes its own outputs. */
@@ -126,6 +100,7 @@ typedef struct rows_ctx {
 	const float *crease; /* what sharp edges carried (sss_crease.c), 3 a
 	                        pixel in the signal's units, or NULL */
 	const sss_image *out_combined, *out_diffuse_light;
+	const float *rest;   /* the frame's sss__rest_light, or NULL */
 } rows_ctx;
 
 /* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
@@ -337,15 +312,12 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				memcpy(o, light, sizeof light);
 			}
 			if (out_combined) {
-				float acc[3];
+				float acc[3], own[3];
+				const float *rest = ctx->rest ? ctx->rest + 3 * i : own;
+				if (!ctx->rest)
+					sss__rest_light(p, x, y, own);
 				for (int c = 0; c < 3; c++)
-					acc[c] = light[c] * col[c];
-				add_scaled(acc, &p->gloss_dir, &p->gloss_ind, &p->gloss_col,
-				           x, y);
-				add_scaled(acc, &p->trans_dir, &p->trans_ind, &p->trans_col,
-				           x, y);
-				add_plain(acc, &p->emit, x, y);
-				add_plain(acc, &p->env, x, y);
+					acc[c] = light[c] * col[c] + rest[c];
 				float *o = out_combined->data + y * sss__stride(out_combined) +
 				           (int64_t)x * out_combined->channels;
 				memcpy(o, acc, sizeof acc);
@@ -541,8 +513,9 @@ static sss_result check_call(const sss_passes *p, const sss_camera *cam,
 static void build_kernels(const sss_passes *p, const sss_camera *cam,
                           const sss_material *materials,
                           int32_t material_count, const sss_options *opt,
-                          int16_t *by_index, double *zrange,
-                          sss__kernel *kernels, sss__projection *proj)
+                          const float *index_zrange, int16_t *by_index,
+                          double *zrange, sss__kernel *kernels,
+                          sss__projection *proj)
 {
 	int32_t w = p->diff_dir.width, h = p->diff_dir.height;
 	/* Kernels only for the table's materials that are on screen (a big
@@ -552,20 +525,11 @@ static void build_kernels(const sss_passes *p, const sss_camera *cam,
 		by_index[i] = -1;
 	for (int32_t m = 0; m < material_count; m++)
 		by_index[materials[m].pass_index] = (int16_t)m;
-	for (int32_t m = 0; m < material_count; m++)
-		zrange[2 * m] = INFINITY, zrange[2 * m + 1] = -INFINITY;
-	for (int32_t y = 0; y < h; y++)
-		for (int32_t x = 0; x < w; x++) {
-			float index = sss__at(&p->index_ma, x, y)[0];
-			if (!(index >= 0.5f && index < 65535.5f))
-				continue;
-			int16_t m = by_index[(int32_t)(index + 0.5f)];
-			double z = sss__at(&p->depth, x, y)[0];
-			if (m < 0 || !isfinite(z))
-				continue;
-			zrange[2 * m] = fmin(zrange[2 * m], z);
-			zrange[2 * m + 1] = fmax(zrange[2 * m + 1], z);
-		}
+	for (int32_t m = 0; m < material_count; m++) {
+		const float *zr = index_zrange + 2 * materials[m].pass_index;
+		zrange[2 * m] = zr[0];
+		zrange[2 * m + 1] = zr[1];
+	}
 	sss__projection_make(cam, w, h, proj, NULL, 0);
 	for (int32_t m = 0; m < material_count; m++) {
 		int32_t idx = materials[m].pass_index;
@@ -613,8 +577,8 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
                              const sss_options *user_opt,
                              const sss_image *out_combined,
                              const sss_image *out_diffuse_light,
-                             int32_t *chosen, char *errbuf,
-                             size_t errbuf_len)
+                             const sss__frame_pre *pre, int32_t *chosen,
+                             char *errbuf, size_t errbuf_len)
 {
 	sss_result r;
 	sss_options opt;
@@ -650,15 +614,20 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
 	                        sizeof *zrange);
+	float *own_index_zrange = pre ? NULL
+	                          : malloc(65536 * 2 * sizeof *own_index_zrange);
 	if (!kernels || !by_index || !slot || !signal || !scratch || !zrange ||
-	    !method_of) {
+	    !method_of || (!pre && !own_index_zrange)) {
 		r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working memory "
 		          "for a %dx%d image", w, h);
 		goto done;
 	}
 
 	sss__projection proj;
-	build_kernels(p, cam, materials, material_count, &opt, by_index, zrange,
+	if (!pre)
+		sss__index_zrange_scan(p, own_index_zrange);
+	build_kernels(p, cam, materials, material_count, &opt,
+	              pre ? pre->zrange : own_index_zrange, by_index, zrange,
 	              kernels, &proj);
 
 	sss__job job = {
@@ -683,6 +652,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		.proj = &job.proj, .signal = signal, .signal_px = job.signal_px,
 		.signal_ch = job.signal_ch, .slot = slot,
 		.out_combined = out_combined, .out_diffuse_light = out_diffuse_light,
+		.rest = pre ? pre->rest : NULL,
 	};
 	/* Materials whose calibration follows the shape need the curvature
 	 * map. */
@@ -754,6 +724,7 @@ done:
 	free(median_x);
 	free(own_scratch);
 	free(zrange);
+	free(own_index_zrange);
 	free(method_of);
 	return r;
 }
@@ -765,6 +736,6 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
                      size_t errbuf_len)
 {
 	return sss__apply_report(p, cam, materials, material_count, opt,
-	                         out_combined, out_diffuse_light, NULL, errbuf,
-	                         errbuf_len);
+	                         out_combined, out_diffuse_light, NULL, NULL,
+	                         errbuf, errbuf_len);
 }

@@ -15,6 +15,7 @@ struct sss_frame {
 	sss_passes passes;
 	const char *layer;  /* the view layer scattered, owned by exr */
 	float *thickness;   /* the square root of a squared thickness AOV */
+	sss__frame_pre pre; /* what every scatter reads alike */
 	char *path;         /* the file read, for messages */
 };
 
@@ -95,6 +96,7 @@ void sss_frame_free(sss_frame *frame)
 		return;
 	sss_exr_free(frame->exr);
 	free(frame->thickness);
+	sss__frame_pre_free(&frame->pre);
 	free(frame->path);
 	free(frame);
 }
@@ -126,6 +128,10 @@ static sss_result frame_from(sss_exr *exr, const char *path,
 	if ((r = back_light_passes(exr, f->layer, &f->passes, &f->thickness,
 	                           path, err, errlen)))
 		goto fail;
+	if ((r = sss__frame_pre_make(&f->passes, 0, &f->pre))) {
+		r = sss__fail(err, errlen, r, "%s: out of memory", path);
+		goto fail;
+	}
 	*out = f;
 	return SSS_OK;
 fail:
@@ -237,7 +243,8 @@ sss_result sss_frame_scatter(const sss_frame *frame, const sss_scene *scene,
 	double t0 = now();
 	r = sss__apply_report(&frame->passes, sss_scene_camera(scene), mats,
 	                      count, &o, out_combined, out_diffuse_light,
-	                      opt.chosen_methods, detail, sizeof detail);
+	                      &frame->pre, opt.chosen_methods, detail,
+	                      sizeof detail);
 	if (seconds)
 		*seconds = now() - t0;
 	if (r)

@@ -262,17 +262,36 @@ sss_result sss__auto_methods(const sss_image *depth, const int16_t *slot,
                              int32_t h, const sss__kernel *kernels,
                              int32_t count, int32_t *method,
                              float *median_x);
+/* What a frame's passes give every scatter alike (sss_frame_pre.c),
+ * made once for a kept frame; sss_apply without one computes the same
+ * per call through the same functions. */
+typedef struct sss__frame_pre {
+	float *rest;   /* 3 floats a pixel, packed: sss__rest_light */
+	float *zrange; /* 2 per material pass index 0..65535: the least and
+	                  greatest finite depth of its pixels (+inf, -inf
+	                  where it has none): sss__index_zrange_scan */
+} sss__frame_pre;
+/* The light of the passes that do not scatter at pixel (x, y): glossy and
+ * transmission (direct + indirect) x their colours, emission and
+ * environment, summed in that order. */
+void sss__rest_light(const sss_passes *p, int32_t x, int32_t y, float out[3]);
+/* zrange (2 x 65536 floats) as in sss__frame_pre. */
+void sss__index_zrange_scan(const sss_passes *p, float *zrange);
+sss_result sss__frame_pre_make(const sss_passes *p, int32_t num_threads,
+                               sss__frame_pre *pre);
+void sss__frame_pre_free(sss__frame_pre *pre); /* zeroes it; twice is fine */
+
 /* sss_apply, also telling the method each material ran (sss_apply.c):
  * chosen, one per material, -1 for one not on screen or that does not
- * scatter; may be NULL. */
+ * scatter; may be NULL. pre: the frame's (NULL: computed here). */
 sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
                              const sss_material *materials,
                              int32_t material_count,
                              const sss_options *opt,
                              const sss_image *out_combined,
                              const sss_image *out_diffuse_light,
-                             int32_t *chosen, char *errbuf,
-                             size_t errbuf_len);
+                             const sss__frame_pre *pre, int32_t *chosen,
+                             char *errbuf, size_t errbuf_len);
 /* The stochastic disk method (sss_disk.c), at most `samples` per pixel;
  * per_source (per kernel, NULL = none): light conserved where it enters
  * rather than where it leaves (what the auto method runs; sss_disk.c). */
