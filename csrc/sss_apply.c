@@ -352,12 +352,13 @@ static sss_result crease_before(const rows_ctx *rc, const sss__job *job,
 	}
 	size_t npix = (size_t)job->width * job->height;
 	if (!r && any) {
-		if (!(*out = malloc(npix * 3 * sizeof **out)))
+		if (!(*out = sss__ws_get(job->ws, SSS__WS_CREASE,
+		                         npix * 3 * sizeof **out, 0)))
 			r = SSS_ERR_OUT_OF_MEMORY;
 		else if ((r = sss__crease(job, material_count, &rc->p->diff_col,
 		                          enabled, calibration, opt->num_threads,
 		                          *out))) {
-			free(*out);
+			sss__ws_put(job->ws, *out);
 			*out = NULL;
 		}
 	}
@@ -577,8 +578,9 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
                              const sss_options *user_opt,
                              const sss_image *out_combined,
                              const sss_image *out_diffuse_light,
-                             const sss__frame_pre *pre, int32_t *chosen,
-                             char *errbuf, size_t errbuf_len)
+                             const sss__frame_pre *pre, sss__workspace *ws,
+                             int32_t *chosen, char *errbuf,
+                             size_t errbuf_len)
 {
 	sss_result r;
 	sss_options opt;
@@ -601,17 +603,19 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	sss__kernel *kernels = calloc(material_count ? material_count : 1,
 	                              sizeof *kernels);
 	int16_t *by_index = malloc(65536 * sizeof *by_index);
-	int16_t *slot = malloc(npix * sizeof *slot);
+	int16_t *slot = sss__ws_get(ws, SSS__WS_SLOT, npix * sizeof *slot, 0);
 	int32_t *method_of = malloc((material_count ? material_count : 1) *
 	                            sizeof *method_of);
-	float *signal = malloc(npix * 3 * sizeof *signal);
+	float *signal = sss__ws_get(ws, SSS__WS_SIGNAL, npix * 3 * sizeof *signal,
+	                            0);
 	float *scratch = packed_output(out_combined, out_diffuse_light);
 	float *own_scratch = NULL;
 	float *curvature = NULL; /* allocated below, once kernels tell */
 	float *crease = NULL;    /* likewise */
 	float *median_x = NULL;  /* likewise */
 	if (!scratch)
-		scratch = own_scratch = malloc(npix * 3 * sizeof *scratch);
+		scratch = own_scratch = sss__ws_get(ws, SSS__WS_SCRATCH,
+		                                    npix * 3 * sizeof *scratch, 0);
 	double *zrange = malloc(2 * (material_count ? material_count : 1) *
 	                        sizeof *zrange);
 	float *own_index_zrange = pre ? NULL
@@ -639,7 +643,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		.position_channels = p->position.channels,
 		.proj = proj, .max_support_px = opt.max_support_px,
 		.signal = signal, .signal_px = 3, .signal_ch = 1,
-		.scratch = scratch,
+		.scratch = scratch, .ws = ws,
 	};
 	if (opt.method == SSS_METHOD_SEPARABLE ||
 	    opt.method == SSS_METHOD_AUTO) /* reads colour planes */
@@ -717,12 +721,12 @@ done:
 	sss__transmission_free(transmission);
 	free(kernels);
 	free(by_index);
-	free(slot);
-	free(signal);
+	sss__ws_put(ws, slot);
+	sss__ws_put(ws, signal);
 	free(curvature);
-	free(crease);
+	sss__ws_put(ws, crease);
 	free(median_x);
-	free(own_scratch);
+	sss__ws_put(ws, own_scratch);
 	free(zrange);
 	free(own_index_zrange);
 	free(method_of);
@@ -737,5 +741,5 @@ sss_result sss_apply(const sss_passes *p, const sss_camera *cam,
 {
 	return sss__apply_report(p, cam, materials, material_count, opt,
 	                         out_combined, out_diffuse_light, NULL, NULL,
-	                         errbuf, errbuf_len);
+	                         NULL, errbuf, errbuf_len);
 }

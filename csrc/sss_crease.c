@@ -670,10 +670,13 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		reach[k] = CREASE_REACH * widest * fmax(wr[0], fmax(wr[1], wr[2]));
 	}
 	crease_ctx *ctx = malloc(sizeof *ctx);
-	float *pos = malloc(npix * 3 * sizeof *pos);
-	float *nrm = malloc(npix * 3 * sizeof *nrm);
-	int8_t *across = malloc(npix * sizeof *across);
-	uint8_t *near = malloc(npix);
+	float *pos = sss__ws_get(job->ws, SSS__WS_EDGE_POS,
+	                         npix * 3 * sizeof *pos, 0);
+	float *nrm = sss__ws_get(job->ws, SSS__WS_EDGE_NRM,
+	                         npix * 3 * sizeof *nrm, 0);
+	int8_t *across = sss__ws_get(job->ws, SSS__WS_EDGE_SIDE,
+	                             npix * sizeof *across, 0);
+	uint8_t *near = sss__ws_get(job->ws, SSS__WS_EDGE_NEAR, npix, 0);
 	int32_t *first = NULL, *sat = NULL;
 	crease_source *sources = NULL;
 	sss_result r = ctx && pos && nrm && across && near && reach
@@ -707,10 +710,10 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 	free(sat);
 	free(sources);
 	free(reach);
-	free(near);
-	free(across);
-	free(pos);
-	free(nrm);
+	sss__ws_put(job->ws, near);
+	sss__ws_put(job->ws, across);
+	sss__ws_put(job->ws, pos);
+	sss__ws_put(job->ws, nrm);
 	free(ctx);
 	return r;
 }

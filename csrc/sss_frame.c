@@ -6,6 +6,7 @@
  * same path. */
 #include "sss_internal.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -16,6 +17,10 @@ struct sss_frame {
 	const char *layer;  /* the view layer scattered, owned by exr */
 	float *thickness;   /* the square root of a squared thickness AOV */
 	sss__frame_pre pre; /* what every scatter reads alike */
+	/* The last scatter's working memory, for the next (sss_frame_trim
+	 * frees it); a scatter takes it, or makes its own while another
+	 * holds it, and leaves it here when none is. */
+	_Atomic(sss__workspace *) spare;
 	char *path;         /* the file read, for messages */
 };
 
@@ -97,6 +102,7 @@ void sss_frame_free(sss_frame *frame)
 	sss_exr_free(frame->exr);
 	free(frame->thickness);
 	sss__frame_pre_free(&frame->pre);
+	sss__workspace_free(atomic_load(&frame->spare));
 	free(frame->path);
 	free(frame);
 }
@@ -241,10 +247,20 @@ sss_result sss_frame_scatter(const sss_frame *frame, const sss_scene *scene,
 	if (opt.progress_fn)
 		opt.progress_fn("scatter", 0.0, opt.progress_user);
 	double t0 = now();
+	/* The frame is the caller's, allocated writable; only its spare
+	 * workspace changes, atomically. */
+	_Atomic(sss__workspace *) *spare = &((sss_frame *)frame)->spare;
+	sss__workspace *ws = atomic_exchange(spare, NULL);
+	if (!ws && !(ws = sss__workspace_new()))
+		return sss__fail(err, errlen, SSS_ERR_OUT_OF_MEMORY, "%s (layer "
+		                 "'%s'): out of memory", frame->path, frame->layer);
 	r = sss__apply_report(&frame->passes, sss_scene_camera(scene), mats,
 	                      count, &o, out_combined, out_diffuse_light,
-	                      &frame->pre, opt.chosen_methods, detail,
+	                      &frame->pre, ws, opt.chosen_methods, detail,
 	                      sizeof detail);
+	sss__workspace *none = NULL;
+	if (!atomic_compare_exchange_strong(spare, &none, ws))
+		sss__workspace_free(ws);
 	if (seconds)
 		*seconds = now() - t0;
 	if (r)
@@ -254,6 +270,12 @@ sss_result sss_frame_scatter(const sss_frame *frame, const sss_scene *scene,
 	if (opt.progress_fn)
 		opt.progress_fn("scatter", 1.0, opt.progress_user);
 	return SSS_OK;
+}
+
+void sss_frame_trim(sss_frame *frame)
+{
+	if (frame)
+		sss__workspace_free(atomic_exchange(&frame->spare, NULL));
 }
 
 /* The result layer is added beside every input channel: an input layer

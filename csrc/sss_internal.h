@@ -40,6 +40,31 @@ typedef struct sss__projection {
 } sss__projection;
 
 /* Everything one blur needs, read-only while the threads run. */
+/* The working memory of a scatter, kept between scatters of one frame
+ * (sss_workspace.c): one block per use below, grown as needed. */
+typedef struct sss__workspace sss__workspace;
+enum {
+	SSS__WS_SLOT,      /* sss_apply: the slot map */
+	SSS__WS_SIGNAL,    /* sss_apply: the light to scatter */
+	SSS__WS_SCRATCH,   /* sss_apply: scratch when no output is packed */
+	SSS__WS_CREASE,    /* sss_apply: what sharp edges carried */
+	SSS__WS_DEPTH_H,   /* separable: depth, packed */
+	SSS__WS_DEPTH_V,   /* separable: depth, transposed */
+	SSS__WS_SLOTS,     /* separable: the slots both ways */
+	SSS__WS_EDGE_POS,  /* crease: positions */
+	SSS__WS_EDGE_NRM,  /* crease: normals */
+	SSS__WS_EDGE_SIDE, /* crease: which side of an edge */
+	SSS__WS_EDGE_NEAR, /* crease: near an edge */
+	SSS__WS_BLOCKS
+};
+sss__workspace *sss__workspace_new(void);
+void sss__workspace_free(sss__workspace *ws); /* NULL is fine */
+/* Block `block` of at least `bytes` bytes (zeroed if asked), valid until
+ * the next get of that block; ws NULL: malloc (calloc), freed by
+ * sss__ws_put. */
+void *sss__ws_get(sss__workspace *ws, int block, size_t bytes, int zeroed);
+void sss__ws_put(sss__workspace *ws, void *p); /* frees only without ws */
+
 typedef struct sss__job {
 	int32_t width, height;
 	const sss__kernel *kernels;
@@ -61,6 +86,7 @@ typedef struct sss__job {
 	 * when it is packed (nothing in it is read before the recombination
 	 * overwrites it), else allocated. */
 	float *scratch;
+	sss__workspace *ws; /* kept working memory, or NULL */
 } sss__job;
 
 /* "a directory", "a FIFO (named pipe)", ...: what a stat mode names, for
@@ -283,15 +309,17 @@ void sss__frame_pre_free(sss__frame_pre *pre); /* zeroes it; twice is fine */
 
 /* sss_apply, also telling the method each material ran (sss_apply.c):
  * chosen, one per material, -1 for one not on screen or that does not
- * scatter; may be NULL. pre: the frame's (NULL: computed here). */
+ * scatter; may be NULL. pre: the frame's (NULL: computed here); ws: the
+ * frame's kept working memory (NULL: allocated and freed here). */
 sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
                              const sss_material *materials,
                              int32_t material_count,
                              const sss_options *opt,
                              const sss_image *out_combined,
                              const sss_image *out_diffuse_light,
-                             const sss__frame_pre *pre, int32_t *chosen,
-                             char *errbuf, size_t errbuf_len);
+                             const sss__frame_pre *pre, sss__workspace *ws,
+                             int32_t *chosen, char *errbuf,
+                             size_t errbuf_len);
 /* The stochastic disk method (sss_disk.c), at most `samples` per pixel;
  * per_source (per kernel, NULL = none): light conserved where it enters
  * rather than where it leaves (what the auto method runs; sss_disk.c). */

@@ -896,17 +896,19 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	sss_result r = SSS_ERR_OUT_OF_MEMORY;
 	int copy_z = !(job->depth_channels == 1 && job->depth_stride == w);
 	/* The light's planes are the job's signal (planar for this method,
-	 * 0 where nothing scatters); the rest starts as zeros (calloc: pages
-	 * nobody touches cost nothing) and only scattering pixels are
-	 * written: the work and the memory follow the coverage. A sample on
+	 * 0 where nothing scatters); the depth planes start as zeros and
+	 * only scattering pixels are written: the work follows the
+	 * coverage. A sample on
 	 * another material is masked off, but must be finite: 0 is. Distances
 	 * come from depth (sss__blur1d_q), so a Position pass is not read. */
 	table *tables = calloc((size_t)count, sizeof *tables);
 	plane hp = {w, h, {NULL}, NULL, NULL};
 	plane vp = {h, w, {NULL}, NULL, NULL};
-	float *hbuf = copy_z ? calloc(npix, sizeof *hbuf) : NULL;
-	float *vbuf = calloc(npix, sizeof *vbuf);
-	int32_t *slots = malloc(2 * npix * sizeof *slots);
+	float *hbuf = copy_z ? sss__ws_get(job->ws, SSS__WS_DEPTH_H,
+	                                   npix * sizeof *hbuf, 1) : NULL;
+	float *vbuf = sss__ws_get(job->ws, SSS__WS_DEPTH_V, npix * sizeof *vbuf, 1);
+	int32_t *slots = sss__ws_get(job->ws, SSS__WS_SLOTS,
+	                             2 * npix * sizeof *slots, 0);
 	if (!tables || (copy_z && !hbuf) || !vbuf || !slots)
 		goto done;
 	/* The transposed light lives in the job's scratch image (fill_rows
@@ -954,9 +956,9 @@ done:
 		for (int32_t m = 0; m < count; m++)
 			table_free(&tables[m]);
 	free(tables);
-	free(vbuf);
-	free(hbuf);
-	free(slots);
+	sss__ws_put(job->ws, vbuf);
+	sss__ws_put(job->ws, hbuf);
+	sss__ws_put(job->ws, slots);
 	return r;
 }
 

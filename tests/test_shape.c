@@ -396,7 +396,7 @@ static sss_result run_method(sphere_frame *f, const sss_material *m,
 	o.method = method;
 	sss_image ol = {out, N, N, 3, 0};
 	return sss__apply_report(&f->ps, &f->cam, m, count, &o, NULL, &ol,
-	                         NULL, chosen, NULL, 0);
+	                         NULL, NULL, chosen, NULL, 0);
 }
 
 /* Whether out equals want exactly on the pixels of pass index idx. */

@@ -215,6 +215,7 @@ def _declare(lib):
                                        c.POINTER(c.c_void_p), c.c_char_p,
                                        c.c_size_t]),
         "sss_frame_free": (None, [c.c_void_p]),
+        "sss_frame_trim": (None, [c.c_void_p]),
         "sss_frame_width": (c.c_int32, [c.c_void_p]),
         "sss_frame_height": (c.c_int32, [c.c_void_p]),
         "sss_frame_layer": (c.c_char_p, [c.c_void_p]),
@@ -644,6 +645,12 @@ class Frame:
         if self._ptr:
             library().sss_frame_free(self._ptr)
             self._ptr = ctypes.c_void_p()
+
+    def trim(self):
+        """Frees the working memory the frame keeps from its last scatter
+        for the next one (sss_frame_trim); must not overlap a scatter."""
+        if self._ptr:
+            library().sss_frame_trim(self._ptr)
 
     def __enter__(self):
         return self

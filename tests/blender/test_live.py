@@ -20,6 +20,10 @@ from exr import read_channels  # noqa: E402
 
 addon = registered(separable_sss)
 
+# Frames free their kept working memory this long after a re-tune; short
+# here, so that settle() does not wait the add-on's ten seconds.
+live.TRIM_SECONDS = 0.2
+
 
 @pytest.fixture(scope="module")
 def blend(tmp_path_factory):
@@ -111,6 +115,28 @@ def test_retune_in_memory_equals_the_command(blend, tmp_path):
     ch, _ = read_channels(out)
     want = np.stack([ch[f"SSS.Combined.{c}"] for c in "RGBA"], -1)
     assert np.abs(shown - want).max() <= 1e-5
+
+
+def test_idle_frame_frees_its_working_memory(blend, tmp_path):
+    """A re-tune leaves the frame's working memory kept for the next one;
+    once none comes for TRIM_SECONDS the live loop frees it, and a re-tune
+    after that gives the same pixels."""
+    scene = open_rendered(blend, tmp_path)
+    live._pending.clear()
+    scale_radius(scene, 3.0)
+    assert bpy.ops.sss.apply() == {'FINISHED'}
+    entry = live.kept(scene)
+    assert entry.holds_memory
+    assert bpy.app.timers.is_registered(live._settled)
+    kept_then = entry.combined.copy()
+    wait = live._settled()          # too soon: it waits to free it
+    assert wait is not None and 0.0 < wait <= live.TRIM_SECONDS
+    assert entry.holds_memory
+    settle()
+    assert not entry.holds_memory
+    assert live.retune(scene, force=True)["scatter"] >= 0.0
+    assert np.array_equal(entry.combined, kept_then)
+    assert entry.holds_memory
 
 
 def test_depsgraph_change_retunes_once_settled(blend, tmp_path):
