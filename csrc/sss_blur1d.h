@@ -86,7 +86,8 @@ static inline float sss__blur1d_rho(float q, float a8)
 /* Taps anywhere along the row (sparse layouts): tap k lies at at[k] r
  * pixels from the centre (signed; r = the sss__blur1d's) and weighs w_c[k]
  * (W over its cell), with A_c/8 in a8_c[k]. It is read by linear
- * interpolation: with o = at[k] r, the pixels i + floor(o) and one right of
+ * interpolation (the centre tap aside: sss__taps.centre): with
+ * o = at[k] r, the pixels i + floor(o) and one right of
  * it take the shares 1 - frac(o) and frac(o) of w_c[k], each with its own
  * falloff rho, and only where it lies in the row on the centre's material.
  * The arrays are padded with zero weights to a multiple of SSS__LANES; tap
@@ -94,6 +95,10 @@ static inline float sss__blur1d_rho(float q, float a8)
  * fields of the sss__blur1d are used, not the table rows. cell[v]: the
  * narrowest cell of vector v's taps, in units of r. */
 typedef struct sss__taps {
+	/* The centre tap's W per channel: not in the lanes, since it reads
+	 * the pixel itself, on its own material and plane (falloff 1), and
+	 * leaving it out makes the default 33 taps four vectors, not five. */
+	float centre[3];
 	int32_t count;         /* a multiple of SSS__LANES */
 	float *at;
 	float *w[3], *a8[3];

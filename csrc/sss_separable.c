@@ -73,8 +73,11 @@ typedef struct table {
 		float *at;         /* n + 1 offsets in units of r */
 		sss__taps layout;  /* both sides' offsets and cells (its own
 		                      w and a8 unused) */
-		float *sides;      /* rows x 6 x layout.count: W_c, then A_c/8,
-		                      of every tap on both sides */
+		size_t size;       /* floats per array of the layout */
+		size_t row_floats; /* a row of sides: 6 x size, then 3 */
+		float *sides;      /* rows x row_floats: W_c, then A_c/8, of
+		                      every tap on both sides, then the centre's
+		                      W_c */
 		double z_lo, z_hi; /* the depths to cover (scan_half_widths) */
 	} cap[2];
 } table;
@@ -154,10 +157,12 @@ static float *dense_row(const table *t, int32_t j)
 	       t->dense_half;
 }
 
-/* Floats per array of an sss__taps for taps 0..n, both sides. */
+/* Floats per array of an sss__taps for taps 1..n, both sides (the centre
+ * is kept apart); at least one vector. */
 static size_t taps_size(int32_t n)
 {
-	return ((size_t)2 * n + 1 + SSS__LANES - 1) / SSS__LANES * SSS__LANES;
+	size_t size = ((size_t)2 * n + SSS__LANES - 1) / SSS__LANES * SSS__LANES;
+	return size ? size : SSS__LANES;
 }
 
 /* Floats an sss__taps for taps 0..n takes. */
@@ -179,18 +184,19 @@ static void taps_point(sss__taps *l, float *m, int32_t n)
 }
 
 /* Taps 0..n at offsets at[t] (units of the half-width) with weights
- * wa[t * PARAMS + p] as both sides' taps: the centre, then each tap left
- * and right of it, padded with zero weights. */
+ * wa[t * PARAMS + p] as both sides' taps: the centre's W apart, then each
+ * tap left and right of it, padded with zero weights. */
 static void both_sides(int32_t n, const float *at, const float *wa,
                        sss__taps *l)
 {
 	int32_t m = 0;
-	for (int32_t t = 0; t <= n; t++) {
+	for (int c = 0; c < 3; c++)
+		l->centre[c] = wa[c];
+	for (int32_t t = 1; t <= n; t++) {
 		const float *p = wa + (size_t)t * PARAMS;
 		/* the cell reaches halfway to the neighbouring taps */
-		float cell = n == 0 ? 0.0f : t == 0 ? at[1]
-		             : 0.5f * (at[t < n ? t + 1 : t] - at[t - 1]);
-		for (int sign = -1; sign <= (t ? 1 : -1); sign += 2) {
+		float cell = 0.5f * (at[t < n ? t + 1 : t] - at[t - 1]);
+		for (int sign = -1; sign <= 1; sign += 2) {
 			int32_t v = m / SSS__LANES;
 			if (m % SSS__LANES == 0 || cell < l->cell[v])
 				l->cell[v] = cell;
@@ -349,7 +355,9 @@ static sss_result cap_build(const sss__job *job, const sss__kernel *k,
 	size_t size = taps_size(n);
 	c->at = malloc((size_t)(n + 1) * sizeof *c->at);
 	c->layout.at = malloc(TAPS_FLOATS(n) * sizeof(float));
-	c->sides = malloc((size_t)rows * 6 * size * sizeof *c->sides);
+	c->size = size;
+	c->row_floats = 6 * size + 3;
+	c->sides = malloc((size_t)rows * c->row_floats * sizeof *c->sides);
 	if (!c->at || !c->layout.at || !c->sides)
 		return SSS_ERR_OUT_OF_MEMORY;
 	taps_point(&c->layout, c->layout.at, n);
@@ -365,11 +373,14 @@ static sss_result cap_build(const sss__job *job, const sss__kernel *k,
 		}
 		/* this row's weights, both sides, in the layout's order */
 		sss__taps row = c->layout;
+		float *at_row = c->sides + (size_t)j * c->row_floats;
 		for (int p = 0; p < 3; p++) {
-			row.w[p] = c->sides + ((size_t)j * 6 + p) * size;
-			row.a8[p] = c->sides + ((size_t)j * 6 + 3 + p) * size;
+			row.w[p] = at_row + p * size;
+			row.a8[p] = at_row + (3 + p) * size;
 		}
 		both_sides(n, c->at, wa, &row);
+		for (int p = 0; p < 3; p++)
+			at_row[6 * size + p] = row.centre[p];
 		c->layout.count = row.count;
 	}
 	c->n = n;
@@ -378,8 +389,8 @@ static sss_result cap_build(const sss__job *job, const sss__kernel *k,
 	return SSS_OK;
 }
 
-/* Where a cut pixel's weights lie in its table: rows r0 and r0 + 6 count
- * floats on, interpolated by f at upp units per pixel; 0 if upp lies
+/* Where a cut pixel's weights lie in its table: rows r0 and r0 +
+ * row_floats, interpolated by f at upp units per pixel; 0 if upp lies
  * outside the table. */
 static int cap_row(const struct capped *c, double upp, float **r0, float *f)
 {
@@ -390,7 +401,7 @@ static int cap_row(const struct capped *c, double upp, float **r0, float *f)
 	if (j > c->rows - 2)
 		j = c->rows - 2;
 	*f = (float)(x - j);
-	*r0 = c->sides + (size_t)j * 6 * c->layout.count;
+	*r0 = c->sides + (size_t)j * c->row_floats;
 	return 1;
 }
 
@@ -527,7 +538,7 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 	    cap_row(cut, ax->ortho ? 1.0 / ax->f : zc / ax->f, &r0, &f)) {
 		/* a limit cut the kernel: its table's taps, the weights
 		 * interpolated between two rows as they are read */
-		size_t size = (size_t)cut->layout.count;
+		size_t size = cut->size, next = cut->row_floats;
 		sss__taps *l = &sc->cut;
 		l->count = cut->layout.count;
 		l->at = cut->layout.at;
@@ -535,8 +546,11 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 		for (int c = 0; c < 3; c++) {
 			l->w[c] = r0 + c * size;
 			l->a8[c] = r0 + (3 + c) * size;
-			l->w1[c] = l->w[c] + 6 * size;
-			l->a81[c] = l->a8[c] + 6 * size;
+			l->w1[c] = l->w[c] + next;
+			l->a81[c] = l->a8[c] + next;
+			/* as the loop interpolates its taps' W */
+			float w0 = r0[6 * size + c], w1 = r0[next + 6 * size + c];
+			l->centre[c] = w0 + f * (w1 - w0);
 		}
 		l->f = f;
 		return l;
@@ -638,9 +652,9 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 		int32_t near = nv < NEAR_VECTORS ? nv : NEAR_VECTORS;
 		float acc[3], ws[3];
 		taps_sum(ctx, &b, t, 0, near);
-		for (int c = 0; c < 3; c++) {
-			acc[c] = b.acc[c];
-			ws[c] = b.wsum[c];
+		for (int c = 0; c < 3; c++) { /* and the centre's own light */
+			acc[c] = b.acc[c] + t->centre[c] * row->rgb[c][i];
+			ws[c] = b.wsum[c] + t->centre[c];
 		}
 		const anchor *lo = &anc[0], *hi = &anc[1];
 		double support = ctx->job->kernels[b.slot_c].support;
