@@ -39,7 +39,6 @@ typedef struct sss__projection {
 	double cx, cy; /* principal point, pixels from the left / the top edge */
 } sss__projection;
 
-/* Everything one blur needs, read-only while the threads run. */
 /* The working memory of a scatter, kept between scatters of one frame
  * (sss_workspace.c): one block per use below, grown as needed. */
 typedef struct sss__workspace sss__workspace;
@@ -55,6 +54,9 @@ enum {
 	SSS__WS_EDGE_NRM,  /* crease: normals */
 	SSS__WS_EDGE_SIDE, /* crease: which side of an edge */
 	SSS__WS_EDGE_NEAR, /* crease: near an edge */
+	SSS__WS_VIEW,      /* sss_apply: the view cosine of each pixel */
+	SSS__WS_VIEW_SLOT, /* sss_apply: the slot map it was made with */
+	SSS__WS_VIEW_KEY,  /* sss_apply: and the camera */
 	SSS__WS_BLOCKS
 };
 sss__workspace *sss__workspace_new(void);
@@ -64,7 +66,11 @@ void sss__workspace_free(sss__workspace *ws); /* NULL is fine */
  * sss__ws_put. */
 void *sss__ws_get(sss__workspace *ws, int block, size_t bytes, int zeroed);
 void sss__ws_put(sss__workspace *ws, void *p); /* frees only without ws */
+/* Block `block` as the last scatter left it, if it holds at least
+ * `bytes` bytes; else (or without ws) NULL. */
+void *sss__ws_kept(sss__workspace *ws, int block, size_t bytes);
 
+/* Everything one blur needs, read-only while the threads run. */
 typedef struct sss__job {
 	int32_t width, height;
 	const sss__kernel *kernels;

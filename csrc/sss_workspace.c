@@ -52,3 +52,9 @@ void sss__ws_put(sss__workspace *ws, void *p)
 	if (!ws)
 		free(p);
 }
+
+void *sss__ws_kept(sss__workspace *ws, int block, size_t bytes)
+{
+	return ws && ws->block[block] && ws->size[block] >= bytes
+	       ? ws->block[block] : NULL;
+}

@@ -222,6 +222,67 @@ done:
 	sss_scene_free(scene);
 }
 
+/* The scene file's text with a calibrated material (its gain reads the
+ * view cosine) and the given lens. */
+static sss_scene *calibrated_scene(const char *lens)
+{
+	char text[8192], err[512];
+	FILE *f = fopen(SCENE, "rb");
+	size_t n = f ? fread(text, 1, sizeof text - 1, f) : 0;
+	if (f)
+		fclose(f);
+	text[n] = '\0';
+	char out[8300];
+	const char *name = strstr(text, "\"name\"");
+	const char *lens_at = strstr(text, "\"lens\": 50.0");
+	sss_scene *scene = NULL;
+	if (!name || !lens_at || name < lens_at)
+		return NULL;
+	snprintf(out, sizeof out, "%.*s\"lens\": %s%.*s\"calibration\": "
+	         "\"cycles4-random-walk\", %s", (int)(lens_at - text), text, lens,
+	         (int)(name - lens_at - strlen("\"lens\": 50.0")),
+	         lens_at + strlen("\"lens\": 50.0"), name);
+	sss_result r = sss_scene_parse(out, strlen(out), &scene, NULL, 0, err,
+	                               sizeof err);
+	CHECK("frame.calibrated-scene", r == SSS_OK, "%s", err);
+	return scene;
+}
+
+/* A kept frame keeps the view cosine while the camera and the scattering
+ * pixels stay: a change of camera between scatters must make it again. */
+static void test_camera_change(void)
+{
+	sss_scene *a = calibrated_scene("50.0"), *b = calibrated_scene("20.0");
+	int32_t w = 0, h = 0;
+	float *want_a = a ? processed(a, 1.0f, "ca.exr", &w, &h) : NULL;
+	float *want_b = b ? processed(b, 1.0f, "cb.exr", &w, &h) : NULL;
+	size_t n = (size_t)w * (size_t)h;
+	CHECK("frame.lens-matters", want_a && want_b &&
+	      !same_bits(want_a, want_b, n * 4), "the lens changed nothing");
+	char err[512];
+	sss_frame *frame = NULL;
+	CHECK_STATUS("frame.read-for-camera", SSS_OK,
+	             sss_frame_read(INPUT, NULL, NULL, &frame, err, sizeof err));
+	float *combined = malloc(n * 4 * sizeof *combined);
+	sss_image oc = {combined, w, h, 4, 0};
+	const sss_scene *order[3] = {a, b, a};
+	const float *wants[3] = {want_a, want_b, want_a};
+	for (int i = 0; frame && combined && want_a && want_b && i < 3; i++) {
+		CHECK_STATUS("frame.scatter-camera", SSS_OK,
+		             sss_frame_scatter(frame, order[i], NULL, &oc, NULL,
+		                               NULL, err, sizeof err));
+		CHECK("frame.camera-change", same_bits(combined, wants[i], n * 4),
+		      "scatter %d (lens %s) differs from sss_process_exr's", i,
+		      i == 1 ? "20" : "50");
+	}
+	free(combined);
+	free(want_a);
+	free(want_b);
+	sss_frame_free(frame);
+	sss_scene_free(a);
+	sss_scene_free(b);
+}
+
 static void test_read_errors(void)
 {
 	char err[512], path[128];
@@ -252,6 +313,7 @@ int main(void)
 		return 1;
 	}
 	test_retune();
+	test_camera_change();
 	test_read_errors();
 	int rc = tu_finish("test_frame");
 	char cmd[128];
