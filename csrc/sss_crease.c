@@ -535,10 +535,6 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 			/* no source within the widest reach: nothing to do */
 			if (!sources_near(ctx, x, y, reach_px(ctx, ctx->reach[k], pix)))
 				continue;
-			if ((ctx->near[i] & NEAR_BENT) && !isnan(ctx->nrm[3 * i]))
-				load3(ctx->nrm + 3 * i, n);
-			else if (!pixel_normal(ctx, x, y, n))
-				continue;
 			const float *col = sss__at(ctx->diff_col, x, y);
 			double kappa[3], d[3], dmax = 0.0;
 			for (int c = 0; c < 3; c++) {
@@ -562,6 +558,10 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 			 * one run: its empty tiles cost nothing. */
 			int32_t listed = sources_near(ctx, x, y, r);
 			if (!listed)
+				continue;
+			if ((ctx->near[i] & NEAR_BENT) && !isnan(ctx->nrm[3 * i]))
+				load3(ctx->nrm + 3 * i, n);
+			else if (!pixel_normal(ctx, x, y, n))
 				continue;
 			int32_t thin = listed > 2 * CREASE_SOURCES
 			               ? listed / CREASE_SOURCES : 1;
