@@ -209,7 +209,9 @@ static double pixel_size(const sss__projection *p, double z)
  * degrees to the view give 2, normals 45 degrees apart at least 0.8; a
  * sphere of radius R pixels seen head-on 1/R, more only near its limb),
  * the pixel is BENT; pixels within 2 of one are NEAR_BENT and get
- * normals (detection reads a pixel beyond each side). */
+ * normals (detection reads a pixel beyond each side), as do the pixels of
+ * the term's materials (the receivers read theirs; made once, a kept
+ * workspace keeps them). */
 #define BEND_SLOPE 0.4
 #define BENT 2u
 #define NEAR_BENT 1u
@@ -272,7 +274,9 @@ static void normal_rows(void *vctx, int32_t y0, int32_t y1)
 	for (int32_t y = y0; y < y1; y++)
 		for (int32_t x = 0; x < w; x++) {
 			size_t i = (size_t)y * w + x;
-			if (!(ctx->near[i] & NEAR_BENT))
+			int16_t slot = job->slot[i];
+			if (!(ctx->near[i] & NEAR_BENT) &&
+			    !(slot >= 0 && ctx->enabled[slot]))
 				continue; /* never read */
 			float *n = (float *)ctx->nrm + 3 * i;
 			double m[3];
@@ -559,10 +563,9 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 			int32_t listed = sources_near(ctx, x, y, r);
 			if (!listed)
 				continue;
-			if ((ctx->near[i] & NEAR_BENT) && !isnan(ctx->nrm[3 * i]))
-				load3(ctx->nrm + 3 * i, n);
-			else if (!pixel_normal(ctx, x, y, n))
-				continue;
+			if (isnan(ctx->nrm[3 * i]))
+				continue; /* its neighbours do not tell */
+			load3(ctx->nrm + 3 * i, n);
 			int32_t thin = listed > 2 * CREASE_SOURCES
 			               ? listed / CREASE_SOURCES : 1;
 			double W = 0.0, WT = 0.0, WS = 0.0, WL[3] = {0};
@@ -652,6 +655,57 @@ static void point_rows(void *vctx, int32_t y0, int32_t y1)
 		}
 }
 
+/* What the geometry in a workspace (points, bends, normals, creases) was
+ * made for: it depends only on the Depth pass (the frame's), the camera,
+ * the slot map and which kernels take the term. Followed by the enabled
+ * flags, one a kernel. */
+typedef struct geometry_key {
+	int made;
+	int32_t w, h, kernel_count;
+	sss__projection proj;
+} geometry_key;
+
+/* Whether job->ws holds the geometry for this job and enabled set. */
+static int geometry_kept(const sss__job *job, int32_t kernel_count,
+                         const uint8_t *enabled)
+{
+	size_t npix = (size_t)job->width * job->height;
+	sss__workspace *ws = job->ws;
+	const geometry_key *key = sss__ws_kept(ws, SSS__WS_EDGE_KEY,
+	                                       sizeof *key + kernel_count);
+	const int16_t *slot = sss__ws_kept(ws, SSS__WS_EDGE_SLOT,
+	                                   npix * sizeof *slot);
+	const sss__projection *a = key ? &key->proj : NULL, *b = &job->proj;
+	return key && slot && key->made && key->w == job->width &&
+	       key->h == job->height && key->kernel_count == kernel_count &&
+	       a->ortho == b->ortho && a->fx == b->fx && a->fy == b->fy &&
+	       a->cx == b->cx && a->cy == b->cy &&
+	       memcmp(key + 1, enabled, (size_t)kernel_count) == 0 &&
+	       sss__ws_kept(ws, SSS__WS_EDGE_POS, npix * 3 * sizeof(float)) &&
+	       sss__ws_kept(ws, SSS__WS_EDGE_NRM, npix * 3 * sizeof(float)) &&
+	       sss__ws_kept(ws, SSS__WS_EDGE_SIDE, npix) &&
+	       sss__ws_kept(ws, SSS__WS_EDGE_NEAR, npix) &&
+	       memcmp(slot, job->slot, npix * sizeof *slot) == 0;
+}
+
+/* Notes in job->ws what its geometry was made for. */
+static sss_result geometry_keep(const sss__job *job, int32_t kernel_count,
+                                const uint8_t *enabled)
+{
+	size_t npix = (size_t)job->width * job->height;
+	geometry_key *key = sss__ws_get(job->ws, SSS__WS_EDGE_KEY,
+	                                sizeof *key + kernel_count, 1);
+	int16_t *slot = sss__ws_get(job->ws, SSS__WS_EDGE_SLOT,
+	                            npix * sizeof *slot, 0);
+	if (!key || !slot)
+		return SSS_ERR_OUT_OF_MEMORY;
+	memcpy(slot, job->slot, npix * sizeof *slot);
+	memcpy(key + 1, enabled, (size_t)kernel_count);
+	*key = (geometry_key){1, job->width, job->height, kernel_count,
+	                      job->proj};
+	return SSS_OK;
+}
+
 sss_result sss__crease(const sss__job *job, int32_t kernel_count,
                        const sss_image *diff_col, const uint8_t *enabled,
                        const int32_t *calibration, int32_t num_threads,
@@ -668,6 +722,15 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		}
 		const float *wr = job->kernels[k].walk_radius;
 		reach[k] = CREASE_REACH * widest * fmax(wr[0], fmax(wr[1], wr[2]));
+	}
+	/* A re-tune of radius or colour changes none of what the geometry
+	 * depends on: a kept one is used as it is. */
+	int kept = job->ws && geometry_kept(job, kernel_count, enabled);
+	if (job->ws && !kept) { /* invalid until made again */
+		geometry_key *key = sss__ws_kept(job->ws, SSS__WS_EDGE_KEY,
+		                                 sizeof *key);
+		if (key)
+			key->made = 0;
 	}
 	crease_ctx *ctx = malloc(sizeof *ctx);
 	float *pos = sss__ws_get(job->ws, SSS__WS_EDGE_POS,
@@ -688,18 +751,23 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		                    .near = near, .across = across, .extra = extra};
 		tabulate(ctx);
 		memset(extra, 0, npix * 3 * sizeof *extra);
-		sss__parallel_rows(job->height, num_threads, point_rows, ctx);
-		sss__parallel_rows(job->height, num_threads, bend_rows, ctx);
+		if (!kept) {
+			sss__parallel_rows(job->height, num_threads, point_rows, ctx);
+			sss__parallel_rows(job->height, num_threads, bend_rows, ctx);
+		}
 	}
 	int bent = 0;
 	for (size_t i = 0; !r && !bent && i < npix; i++)
 		bent = near[i] & BENT;
-	if (bent) { /* else no crease: smooth, or only silhouettes */
+	if (bent && !kept) { /* else no crease: smooth, or only silhouettes */
 		mark_near(ctx);
 		sss__parallel_rows(job->height, num_threads, normal_rows, ctx);
 		sss__parallel_rows(job->height, num_threads, detect_rows, ctx);
-		r = list_sources(ctx, &first, &sat, &sources);
 	}
+	if (!r && job->ws && !kept)
+		r = geometry_keep(job, kernel_count, enabled);
+	if (!r && bent)
+		r = list_sources(ctx, &first, &sat, &sources);
 	if (!r && bent && first[(size_t)ctx->tiles_x * ctx->tiles_y] > 0) {
 		ctx->tile_first = first;
 		ctx->tile_sat = sat;

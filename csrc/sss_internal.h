@@ -54,6 +54,8 @@ enum {
 	SSS__WS_EDGE_NRM,  /* crease: normals */
 	SSS__WS_EDGE_SIDE, /* crease: which side of an edge */
 	SSS__WS_EDGE_NEAR, /* crease: near an edge */
+	SSS__WS_EDGE_KEY,  /* crease: what its geometry was made for */
+	SSS__WS_EDGE_SLOT, /* crease: and the slot map */
 	SSS__WS_VIEW,      /* sss_apply: the view cosine of each pixel */
 	SSS__WS_VIEW_SLOT, /* sss_apply: the slot map it was made with */
 	SSS__WS_VIEW_KEY,  /* sss_apply: and the camera */
