@@ -342,18 +342,12 @@ static void view_rows(void *vctx, int32_t y0, int32_t y1)
 		}
 }
 
-/* What a kept view cosine was made for. */
+/* What a kept view cosine was made for, beside the slot map. */
 typedef struct view_key {
 	int made;
 	int32_t w, h;
 	sss__projection proj;
 } view_key;
-
-static int same_projection(const sss__projection *a, const sss__projection *b)
-{
-	return a->ortho == b->ortho && a->fx == b->fx && a->fy == b->fy &&
-	       a->cx == b->cx && a->cy == b->cy;
-}
 
 /* rc->view: the view cosine of every scattering pixel, from the Depth
  * pass, the slot map and the camera. With a workspace it is kept with
@@ -374,24 +368,21 @@ static sss_result view_plane(rows_ctx *rc, sss__workspace *ws,
 	}
 	view_key *key = sss__ws_kept(ws, SSS__WS_VIEW_KEY, sizeof *key);
 	float *view = sss__ws_kept(ws, SSS__WS_VIEW, npix * sizeof *view);
-	int16_t *made_with = sss__ws_kept(ws, SSS__WS_VIEW_SLOT,
-	                                  npix * sizeof *made_with);
-	if (key && view && made_with && key->made && key->w == rc->w &&
-	    key->h == rc->h && same_projection(&key->proj, rc->proj) &&
-	    memcmp(made_with, rc->slot, npix * sizeof *made_with) == 0) {
+	if (key && view && key->made && key->w == rc->w && key->h == rc->h &&
+	    sss__same_projection(&key->proj, rc->proj) &&
+	    sss__ws_same_slots(ws, SSS__WS_VIEW_SLOT, rc->slot, npix)) {
 		rc->view = view;
 		return SSS_OK;
 	}
 	key = sss__ws_get(ws, SSS__WS_VIEW_KEY, sizeof *key, 1);
 	rc->view = sss__ws_get(ws, SSS__WS_VIEW, npix * sizeof *view, 0);
-	made_with = sss__ws_get(ws, SSS__WS_VIEW_SLOT, npix * sizeof *made_with,
-	                        0);
-	if (!key || !rc->view || !made_with)
+	if (!key || !rc->view)
 		return SSS_ERR_OUT_OF_MEMORY;
 	sss__parallel_rows(rc->h, num_threads, view_rows, rc);
-	memcpy(made_with, rc->slot, npix * sizeof *made_with);
-	*key = (view_key){1, rc->w, rc->h, *rc->proj};
-	return SSS_OK;
+	sss_result r = sss__ws_note_slots(ws, SSS__WS_VIEW_SLOT, rc->slot, npix);
+	if (!r)
+		*key = (view_key){1, rc->w, rc->h, *rc->proj};
+	return r;
 }
 
 /* The crease term (sss_crease.c) for the materials whose calibration

@@ -139,6 +139,12 @@ sss_result sss_camera_pixels_per_metre(const sss_camera *cam, int32_t width,
 	return SSS_OK;
 }
 
+int sss__same_projection(const sss__projection *a, const sss__projection *b)
+{
+	return a->ortho == b->ortho && a->fx == b->fx && a->fy == b->fy &&
+	       a->cx == b->cx && a->cy == b->cy;
+}
+
 double sss__pixels_per_unit_x(const sss__projection *p, double z)
 {
 	return p->ortho ? p->fx : p->fx / z;

@@ -725,19 +725,15 @@ static int geometry_kept(const sss__job *job, int32_t kernel_count,
 	sss__workspace *ws = job->ws;
 	const geometry_key *key = sss__ws_kept(ws, SSS__WS_EDGE_KEY,
 	                                       sizeof *key + kernel_count);
-	const int16_t *slot = sss__ws_kept(ws, SSS__WS_EDGE_SLOT,
-	                                   npix * sizeof *slot);
-	const sss__projection *a = key ? &key->proj : NULL, *b = &job->proj;
-	return key && slot && key->made && key->w == job->width &&
+	return key && key->made && key->w == job->width &&
 	       key->h == job->height && key->kernel_count == kernel_count &&
-	       a->ortho == b->ortho && a->fx == b->fx && a->fy == b->fy &&
-	       a->cx == b->cx && a->cy == b->cy &&
+	       sss__same_projection(&key->proj, &job->proj) &&
 	       memcmp(key + 1, enabled, (size_t)kernel_count) == 0 &&
 	       sss__ws_kept(ws, SSS__WS_EDGE_POS, npix * 3 * sizeof(float)) &&
 	       sss__ws_kept(ws, SSS__WS_EDGE_NRM, npix * 3 * sizeof(float)) &&
 	       sss__ws_kept(ws, SSS__WS_EDGE_SIDE, npix) &&
 	       sss__ws_kept(ws, SSS__WS_EDGE_NEAR, npix) &&
-	       memcmp(slot, job->slot, npix * sizeof *slot) == 0;
+	       sss__ws_same_slots(ws, SSS__WS_EDGE_SLOT, job->slot, npix);
 }
 
 /* Notes in job->ws what its geometry was made for. */
@@ -747,11 +743,9 @@ static sss_result geometry_keep(const sss__job *job, int32_t kernel_count,
 	size_t npix = (size_t)job->width * job->height;
 	geometry_key *key = sss__ws_get(job->ws, SSS__WS_EDGE_KEY,
 	                                sizeof *key + kernel_count, 1);
-	int16_t *slot = sss__ws_get(job->ws, SSS__WS_EDGE_SLOT,
-	                            npix * sizeof *slot, 0);
-	if (!key || !slot)
+	if (!key || sss__ws_note_slots(job->ws, SSS__WS_EDGE_SLOT, job->slot,
+	                               npix))
 		return SSS_ERR_OUT_OF_MEMORY;
-	memcpy(slot, job->slot, npix * sizeof *slot);
 	memcpy(key + 1, enabled, (size_t)kernel_count);
 	*key = (geometry_key){1, 0, job->width, job->height, kernel_count,
 	                      job->proj};

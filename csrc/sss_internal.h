@@ -59,6 +59,7 @@ enum {
 	SSS__WS_VIEW,      /* sss_apply: the view cosine of each pixel */
 	SSS__WS_VIEW_SLOT, /* sss_apply: the slot map it was made with */
 	SSS__WS_VIEW_KEY,  /* sss_apply: and the camera */
+	SSS__WS_PLANE_SLOT, /* separable: the slot map its planes hold */
 	SSS__WS_BLOCKS
 };
 sss__workspace *sss__workspace_new(void);
@@ -71,6 +72,14 @@ void sss__ws_put(sss__workspace *ws, void *p); /* frees only without ws */
 /* Block `block` as the last scatter left it, if it holds at least
  * `bytes` bytes; else (or without ws) NULL. */
 void *sss__ws_kept(sss__workspace *ws, int block, size_t bytes);
+/* What a kept plane was made from: block `block` holds a copy of the slot
+ * map (sss__ws_note_slots), compared by sss__ws_same_slots (0 without
+ * ws or copy); sss__ws_forget drops it (the plane is being remade). */
+int sss__ws_same_slots(sss__workspace *ws, int block, const int16_t *slot,
+                       size_t npix);
+sss_result sss__ws_note_slots(sss__workspace *ws, int block,
+                              const int16_t *slot, size_t npix);
+void sss__ws_forget(sss__workspace *ws, int block);
 
 /* Everything one blur needs, read-only while the threads run. */
 typedef struct sss__job {
@@ -245,6 +254,7 @@ void sss__view_point(const sss__projection *p, int32_t x, int32_t y,
 float sss__view_cosine(const sss_image *depth, const int16_t *slot,
                        const sss__projection *p, int32_t w, int32_t h,
                        int32_t x, int32_t y);
+int sss__same_projection(const sss__projection *a, const sss__projection *b);
 double sss__pixels_per_unit_x(const sss__projection *p, double z);
 double sss__pixels_per_unit_y(const sss__projection *p, double z);
 /* The largest kernel support (scene units) worth tabulating for pixels at

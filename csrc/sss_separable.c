@@ -310,6 +310,7 @@ typedef struct pass_ctx {
 	int avx2;
 	int32_t half_max;      /* largest tap count right of the centre */
 	atomic_int *failed;    /* a band could not allocate its scratch */
+	int planes_kept;       /* depth and slots laid out already */
 } pass_ctx;
 
 /* Half-width in pixels of kernel k at depth z along the axis, and whether
@@ -720,8 +721,11 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 		size_t o = (size_t)x * h + y0, n = (size_t)(y1 - y0);
 		for (int c = 0; c < 3; c++)
 			memset(out->rgb[c] + o, 0, n * sizeof(float));
-		memset(out->slot + o, 0xff, n * sizeof *out->slot); /* -1 */
+		if (!ctx->planes_kept)
+			memset(out->slot + o, 0xff, n * sizeof *out->slot); /* -1 */
 	}
+	if (ctx->planes_kept)
+		return; /* a kept workspace's, for this slot map */
 	for (size_t i = (size_t)y0 * w; i < (size_t)y1 * w; i++)
 		in->slot[i] = job->slot[i];
 	for (int32_t yb = y0; yb < y1; yb += BLOCK) {
@@ -918,9 +922,16 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	table *tables = calloc((size_t)count, sizeof *tables);
 	plane hp = {w, h, {NULL}, NULL, NULL};
 	plane vp = {h, w, {NULL}, NULL, NULL};
+	/* Depth and slots laid out both ways depend on the frame's depth and
+	 * the slot map only: a kept workspace keeps them for a re-tune that
+	 * leaves the slot map as it was (same bits). */
+	int kept = sss__ws_same_slots(job->ws, SSS__WS_PLANE_SLOT, job->slot,
+	                              npix);
+	sss__ws_forget(job->ws, SSS__WS_PLANE_SLOT); /* noted once laid out */
 	float *hbuf = copy_z ? sss__ws_get(job->ws, SSS__WS_DEPTH_H,
-	                                   npix * sizeof *hbuf, 1) : NULL;
-	float *vbuf = sss__ws_get(job->ws, SSS__WS_DEPTH_V, npix * sizeof *vbuf, 1);
+	                                   npix * sizeof *hbuf, !kept) : NULL;
+	float *vbuf = sss__ws_get(job->ws, SSS__WS_DEPTH_V, npix * sizeof *vbuf,
+	                          !kept);
 	int32_t *slots = sss__ws_get(job->ws, SSS__WS_SLOTS,
 	                             2 * npix * sizeof *slots, 0);
 	if (!tables || (copy_z && !hbuf) || !vbuf || !slots)
@@ -958,10 +969,15 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 		if (tables[m].half > half_max)
 			half_max = tables[m].half;
 	atomic_int failed = 0;
-	pass_ctx first = {job, tables, hp, vp, ax[0], 1, avx2, half_max, &failed};
+	pass_ctx first = {job, tables, hp, vp, ax[0], 1, avx2, half_max, &failed,
+	                  kept};
 	sss__parallel_rows(h, num_threads, fill_rows, &first);
+	if (job->ws && (r = sss__ws_note_slots(job->ws, SSS__WS_PLANE_SLOT,
+	                                       job->slot, npix)))
+		goto done;
 	sss__parallel_rows(h, num_threads, pass_rows, &first);
-	pass_ctx second = {job, tables, vp, hp, ax[1], 0, avx2, half_max, &failed};
+	pass_ctx second = {job, tables, vp, hp, ax[1], 0, avx2, half_max, &failed,
+	                   kept};
 	if (!atomic_load(&failed))
 		sss__parallel_rows(w, num_threads, pass_rows, &second);
 	r = atomic_load(&failed) ? SSS_ERR_OUT_OF_MEMORY : SSS_OK;

@@ -58,3 +58,29 @@ void *sss__ws_kept(sss__workspace *ws, int block, size_t bytes)
 	return ws && ws->block[block] && ws->size[block] >= bytes
 	       ? ws->block[block] : NULL;
 }
+
+int sss__ws_same_slots(sss__workspace *ws, int block, const int16_t *slot,
+                       size_t npix)
+{
+	const int16_t *kept = sss__ws_kept(ws, block, npix * sizeof *kept);
+	return kept && memcmp(kept, slot, npix * sizeof *kept) == 0;
+}
+
+sss_result sss__ws_note_slots(sss__workspace *ws, int block,
+                              const int16_t *slot, size_t npix)
+{
+	int16_t *copy = sss__ws_get(ws, block, npix * sizeof *copy, 0);
+	if (!copy)
+		return SSS_ERR_OUT_OF_MEMORY;
+	memcpy(copy, slot, npix * sizeof *copy);
+	return SSS_OK;
+}
+
+void sss__ws_forget(sss__workspace *ws, int block)
+{
+	if (ws) {
+		free(ws->block[block]);
+		ws->block[block] = NULL;
+		ws->size[block] = 0;
+	}
+}

@@ -266,16 +266,25 @@ static void test_kept_geometry(void)
 	size_t n = (size_t)3 * f.n * f.n;
 	float *want = malloc(sizeof(float) * n), *off = malloc(sizeof(float) * n);
 	sss__workspace *ws = sss__workspace_new();
-	/* radius, the camera's width, crease on: the second reuses the first's
-	 * geometry, the third needs it made again for the camera, the fourth
-	 * for the slot map (the material off the table), the fifth again */
-	const struct { float radius; double view; int index; } steps[] = {
-		{0.03f, VIEW, 1}, {0.05f, VIEW, 1}, {0.05f, 1.5 * VIEW, 1},
-		{0.05f, 1.5 * VIEW, 2}, {0.03f, VIEW, 1}};
-	for (int k = 0; ws && want && off && k < 5; k++) {
+	/* radius, the camera's width, the material's pass index, rows of
+	 * the index pass cleared: the second reuses the first's geometry (and
+	 * planes), the third needs them made again for the camera, the fourth
+	 * for the slot map (the material off the table), the fifth again, the
+	 * sixth for the slot map (a quarter of the rows no longer scatter),
+	 * the seventh for it back */
+	const struct { float radius; double view; int index, cut; } steps[] = {
+		{0.03f, VIEW, 1, 0}, {0.05f, VIEW, 1, 0}, {0.05f, 1.5 * VIEW, 1, 0},
+		{0.05f, 1.5 * VIEW, 2, 0}, {0.03f, VIEW, 1, 0}, {0.03f, VIEW, 1, 1},
+		{0.03f, VIEW, 1, 0}};
+	float *idx = malloc(sizeof(float) * f.n * f.n);
+	if (idx)
+		memcpy(idx, f.idx, sizeof(float) * f.n * f.n);
+	for (int k = 0; ws && want && off && idx && k < 7; k++) {
 		sss_material m = skin_walk(steps[k].radius, 0.6f);
 		m.pass_index = steps[k].index;
 		f.cam.ortho_scale = steps[k].view;
+		for (int i = 0; i < f.n * f.n; i++)
+			f.idx[i] = steps[k].cut && i < f.n * f.n / 4 ? 0.0f : idx[i];
 		CHECK_STATUS("kept-want", SSS_OK, run(&f, &m, 1, want));
 		sss_image ol = {f.out, f.n, f.n, 3, 0};
 		CHECK_STATUS("kept-status", SSS_OK,
@@ -292,6 +301,7 @@ static void test_kept_geometry(void)
 		}
 	}
 	sss__workspace_free(ws);
+	free(idx);
 	free(want);
 	free(off);
 	frame_free(&f);
