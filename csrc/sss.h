@@ -832,11 +832,11 @@ SSS_API sss_result sss_frame_scatter(const sss_frame *frame,
                                      double *seconds, char *errbuf,
                                      size_t errbuf_len);
 
-/* A frame keeps the working memory of its last scatter for the next one
- * (about 55 MB at 1080p, more with the crease term: taken afresh, its
- * pages cost about a tenth of a re-tune); this frees it, for when no
- * re-tune is expected soon. The next scatter allocates it again. May not
- * overlap a scatter of the frame. */
+/* A frame keeps the working memory of its last scatter for the next one,
+ * with what in it depends only on the depth, the camera and which pixels
+ * scatter (reused while those stay): about 70 MB at 1080p, 150 MB with the
+ * crease term. This frees it, for when no re-tune is expected soon; the
+ * next scatter makes it again. May not overlap a scatter of the frame. */
 SSS_API void sss_frame_trim(sss_frame *frame); /* NULL is fine */
 
 /* Writes the frame's file with the SSS layer (Combined RGBA and DiffLight

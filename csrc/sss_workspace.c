@@ -4,7 +4,9 @@
  * cost about a tenth of a re-tune (1080p demo, two threads: 0.162 s
  * against 0.145 s with the memory kept). A kept frame (sss_frame.c) holds
  * one workspace between its scatters; without one every block is
- * allocated and freed as usual. */
+ * allocated and freed as usual. Planes that depend only on the depth, the
+ * camera and the slot map live here too, noted with the slot map they
+ * were made from (sss__ws_note_slots) and remade when it changes. */
 #include "sss_internal.h"
 
 #include <stdlib.h>

@@ -34,7 +34,7 @@ from .switch_off import assign_pass_indices
 # drag sends a change per redraw; its pauses scatter.
 SETTLE_SECONDS = 0.08
 # How long after its last re-tune a frame keeps the working memory for the
-# next (about 55 MB at 1080p; taken afresh it costs a tenth of a re-tune).
+# next (70 - 150 MB at 1080p; made afresh it costs a third of a re-tune).
 TRIM_SECONDS = 10.0
 
 
