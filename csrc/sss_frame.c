@@ -109,8 +109,8 @@ void sss_frame_free(sss_frame *frame)
 
 /* Takes exr (freed on failure too). */
 static sss_result frame_from(sss_exr *exr, const char *path,
-                             const char *layer, sss_frame **out, char *err,
-                             size_t errlen)
+                             const char *layer, int32_t num_threads,
+                             sss_frame **out, char *err, size_t errlen)
 {
 	sss_result r;
 	sss_frame *f = calloc(1, sizeof *f);
@@ -134,7 +134,7 @@ static sss_result frame_from(sss_exr *exr, const char *path,
 	if ((r = back_light_passes(exr, f->layer, &f->passes, &f->thickness,
 	                           path, err, errlen)))
 		goto fail;
-	if ((r = sss__frame_pre_make(&f->passes, 0, &f->pre))) {
+	if ((r = sss__frame_pre_make(&f->passes, num_threads, &f->pre))) {
 		r = sss__fail(err, errlen, r, "%s: out of memory", path);
 		goto fail;
 	}
@@ -162,7 +162,8 @@ sss_result sss_frame_read(const char *path, const char *layer,
 	sss_result r = sss_exr_read(path, opt, &exr, err, errlen);
 	if (r)
 		return r;
-	return frame_from(exr, path, layer, out, err, errlen);
+	return frame_from(exr, path, layer, opt ? opt->num_threads : 0, out, err,
+	                  errlen);
 }
 
 int32_t sss_frame_width(const sss_frame *frame)

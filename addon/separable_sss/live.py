@@ -132,7 +132,13 @@ def keep(scene, view_layer, frame, combined, fixed=None):
     with (the library refuses another scene radius scale for it)."""
     drop(scene.name)
     scattered = combined is not None
-    if not scattered:
+    if scattered:
+        # the render's scatter left its working memory in the frame: a
+        # render may never be re-tuned, so it goes now (the first re-tune
+        # makes it again; render handlers may run off the main thread, so
+        # no timer is set here)
+        frame.trim()
+    else:
         combined = np.zeros((frame.height, frame.width, 4), np.float32)
     entry = Kept(frame, view_layer, combined, fixed=fixed)
     if fixed is None:

@@ -122,6 +122,7 @@ def test_idle_frame_frees_its_working_memory(blend, tmp_path):
     once none comes for TRIM_SECONDS the live loop frees it, and a re-tune
     after that gives the same pixels."""
     scene = open_rendered(blend, tmp_path)
+    assert not live.kept(scene).holds_memory    # the render's is freed
     live._pending.clear()
     scale_radius(scene, 3.0)
     assert bpy.ops.sss.apply() == {'FINISHED'}
