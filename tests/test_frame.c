@@ -4,6 +4,7 @@
  * a scatter, writes the same file, and refuses misuse with a status. */
 #include "test_util.h"
 
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -283,6 +284,70 @@ static void test_camera_change(void)
 	sss_scene_free(b);
 }
 
+/* A frame scattered from several threads at once: each scatter takes the
+ * frame's kept working memory or makes its own, and every result equals
+ * the whole-file path's, whichever it got. */
+typedef struct worker {
+	const sss_frame *frame;
+	const sss_scene *scene;
+	const float *want[2];
+	int32_t w, h;
+	int same; /* every scatter matched */
+} worker;
+
+static void *scatter_worker(void *arg)
+{
+	worker *wk = arg;
+	size_t n = (size_t)wk->w * wk->h;
+	float *out = malloc(n * 4 * sizeof *out);
+	sss_image oc = {out, wk->w, wk->h, 4, 0};
+	sss_process_options opt;
+	sss_process_options_default(&opt);
+	opt.num_threads = 1;
+	wk->same = out != NULL;
+	for (int i = 0; out && i < 6; i++) {
+		opt.radius_scale = i % 2 ? 100.0f : 1.0f;
+		char err[512];
+		wk->same &= sss_frame_scatter(wk->frame, wk->scene, &opt, &oc, NULL,
+		                              NULL, err, sizeof err) == SSS_OK &&
+		            same_bits(out, wk->want[i % 2], n * 4);
+	}
+	free(out);
+	return NULL;
+}
+
+static void test_threads(void)
+{
+	char err[512];
+	sss_scene *scene = NULL;
+	sss_frame *frame = NULL;
+	CHECK_STATUS("frame.threads-scene", SSS_OK,
+	             sss_scene_load(SCENE, &scene, NULL, 0, err, sizeof err));
+	int32_t w = 0, h = 0;
+	float *want1 = scene ? processed(scene, 1.0f, "t1.exr", &w, &h) : NULL;
+	float *want3 = scene ? processed(scene, 100.0f, "t3.exr", &w, &h) : NULL;
+	CHECK_STATUS("frame.threads-read", SSS_OK,
+	             sss_frame_read(INPUT, NULL, NULL, &frame, err, sizeof err));
+	worker wk[4];
+	pthread_t th[4];
+	int started[4] = {0};
+	for (int t = 0; frame && want1 && want3 && t < 4; t++) {
+		wk[t] = (worker){frame, scene, {want1, want3}, w, h, 0};
+		started[t] = pthread_create(&th[t], NULL, scatter_worker, &wk[t]) == 0;
+		CHECK("frame.threads-start", started[t], "thread %d", t);
+	}
+	for (int t = 0; t < 4; t++)
+		if (started[t]) {
+			pthread_join(th[t], NULL);
+			CHECK("frame.threads-same", wk[t].same, "thread %d: a scatter "
+			      "differs from sss_process_exr's", t);
+		}
+	free(want1);
+	free(want3);
+	sss_frame_free(frame);
+	sss_scene_free(scene);
+}
+
 static void test_read_errors(void)
 {
 	char err[512], path[128];
@@ -314,6 +379,7 @@ int main(void)
 	}
 	test_retune();
 	test_camera_change();
+	test_threads();
 	test_read_errors();
 	int rc = tu_finish("test_frame");
 	char cmd[128];
