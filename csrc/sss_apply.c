@@ -102,7 +102,7 @@ typedef struct rows_ctx {
 	const sss_image *out_combined, *out_diffuse_light;
 	const float *rest;   /* the frame's sss__rest_light, or NULL */
 	float *view;         /* the view cosine of every scattering pixel
-	                        (view_plane), or NULL where no gain needs it */
+	                        (view_plane), or NULL: made pixel by pixel */
 } rows_ctx;
 
 /* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
@@ -274,7 +274,10 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				const sss_material *m = &materials[slot[i]];
 				const float *fade = kernels[slot[i]].calibration_fade;
 				float mu = sss__calibration_needs_view(m, fade)
-				           ? ctx->view[i] : 1.0f;
+				           ? ctx->view ? ctx->view[i]
+				             : sss__view_cosine(&p->depth, slot, ctx->proj,
+				                                w, ctx->h, x, y)
+				           : 1.0f;
 				/* and at the surface's curvature over the distance
 				   the walk travels */
 				float shape[3], far[3];
@@ -350,22 +353,15 @@ typedef struct view_key {
 } view_key;
 
 /* rc->view: the view cosine of every scattering pixel, from the Depth
- * pass, the slot map and the camera. With a workspace it is kept with
- * the slot map and camera it was made for, and made again only when
- * either changed (a re-tune of radius or colour changes neither: 18 ms of
- * a 1080p scatter on two threads); the same bits either way. Without one,
- * *own holds it. */
+ * pass, the slot map and the camera, kept in the workspace with the slot
+ * map and camera it was made for, and made again only when either changed
+ * (a re-tune of radius or colour changes neither: 18 ms of a 1080p
+ * scatter on two threads). Without a workspace the recombination makes
+ * each pixel's as it goes (the same bits, no plane). */
 static sss_result view_plane(rows_ctx *rc, sss__workspace *ws,
-                             int32_t num_threads, float **own)
+                             int32_t num_threads)
 {
 	size_t npix = (size_t)rc->w * rc->h;
-	*own = NULL;
-	if (!ws) {
-		if (!(rc->view = *own = malloc(npix * sizeof **own)))
-			return SSS_ERR_OUT_OF_MEMORY;
-		sss__parallel_rows(rc->h, num_threads, view_rows, rc);
-		return SSS_OK;
-	}
 	view_key *key = sss__ws_kept(ws, SSS__WS_VIEW_KEY, sizeof *key);
 	float *view = sss__ws_kept(ws, SSS__WS_VIEW, npix * sizeof *view);
 	if (key && view && key->made && key->w == rc->w && key->h == rc->h &&
@@ -669,7 +665,6 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	float *curvature = NULL; /* allocated below, once kernels tell */
 	float *crease = NULL;    /* likewise */
 	float *median_x = NULL;  /* likewise */
-	float *own_view = NULL;  /* likewise (view_plane) */
 	if (!scratch)
 		scratch = own_scratch = sss__ws_get(ws, SSS__WS_SCRATCH,
 		                                    npix * 3 * sizeof *scratch, 0);
@@ -773,7 +768,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		needs_view |= kernels[m].support > 0.0 &&
 		              sss__calibration_needs_view(&materials[m],
 		                                          kernels[m].calibration_fade);
-	if (needs_view && (r = view_plane(&rc, ws, opt.num_threads, &own_view))) {
+	if (needs_view && ws && (r = view_plane(&rc, ws, opt.num_threads))) {
 		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
 		goto done;
 	}
@@ -792,7 +787,6 @@ done:
 	free(curvature);
 	sss__ws_put(ws, crease);
 	free(median_x);
-	free(own_view);
 	sss__ws_put(ws, own_scratch);
 	free(zrange);
 	free(own_index_zrange);
