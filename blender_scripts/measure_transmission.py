@@ -127,10 +127,10 @@ def light_from_the_front(scene):
     sun.rotation_euler = (math.pi / 2, 0.0, 0.0)  # shining along +Y
 
 
-def scatter_slab(work, tag, desc, on, mask):
-    """The library on one slab's SSS-off passes with its description,
-    transmission on or off: the mean SSS.Combined over mask, and the
-    description as run."""
+def process(work, tag, desc, on, passes):
+    """The library on the passes with the description, transmission on or
+    off: SSS.Combined (RGB), the library's timings and the description as
+    run (written beside it in work)."""
     from separable_sss import native
     d = json.loads(json.dumps(desc))
     if not on:
@@ -141,9 +141,17 @@ def scatter_slab(work, tag, desc, on, mask):
         json.dump(d, f, indent=1)
     out = os.path.join(work, f"{tag}_sss{int(on)}.exr")
     with native.Scene(jp) as sc:
-        sc.process(os.path.join(work, f"{tag}_off.exr"), out,
-                   layer="ViewLayer")
-    return rgb(read_exr(out), "SSS.Combined")[mask].mean(0), d
+        t = sc.process(passes, out, layer="ViewLayer")
+    return rgb(read_exr(out), "SSS.Combined"), t, d
+
+
+def scatter_slab(work, tag, desc, on, mask):
+    """The library on one slab's SSS-off passes with its description,
+    transmission on or off: the mean SSS.Combined over mask, and the
+    description as run."""
+    image, _, d = process(work, tag, desc, on,
+                          os.path.join(work, f"{tag}_off.exr"))
+    return image[mask].mean(0), d
 
 
 def front_row(work, tag, thick, sub, desc, ref, mask, lum):
@@ -297,7 +305,7 @@ def main():
         os.makedirs(args.out, exist_ok=True)
         slab_sweep(args)
         return
-    from separable_sss import native, pipeline, transmission
+    from separable_sss import pipeline, transmission
     from separable_sss.switch_off import switched_off
     os.makedirs(args.out, exist_ok=True)
     work = os.path.join(args.out, "work")
@@ -327,17 +335,8 @@ def main():
                 desc = pipeline.scene_description(scene, found)
     results = {}
     for on in (False, True):
-        d = json.loads(json.dumps(desc))
-        if not on:
-            for m in d["materials"]:
-                m["transmission"] = "off"
-        path = os.path.join(work, f"scene_{int(on)}.json")
-        with open(path, "w") as f:
-            json.dump(d, f, indent=1)
-        out = os.path.join(work, f"sss_{int(on)}.exr")
-        with native.Scene(path) as sc:
-            t = sc.process(inp, out, layer="ViewLayer")
-        results[on] = (rgb(read_exr(out), "SSS.Combined"), t["scatter"])
+        image, t, _ = process(work, "scene", desc, on, inp)
+        results[on] = (image, t["scatter"])
 
     ch = read_exr(inp)
     idx = np.rint(ch["ViewLayer.IndexMA.X"])
