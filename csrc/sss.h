@@ -343,12 +343,20 @@ typedef struct sss_material {
 	float transmission_scale;        /* >= 0 (1): fast */
 	float transmission_ambient;      /* >= 0 (0): fast */
 	float thickness_scale;           /* >= 0 (1): multiplies the pass */
+	float thin_reflectance;          /* 0..1 (0): share of the loss of
+	                                    light a thin part reflects, lit
+	                                    from the front, against a thick
+	                                    one (measured for Blender 4.x's
+	                                    Random Walk (Skin); others: none),
+	                                    at the thickness pass x
+	                                    thickness_scale; no pass: none */
 	float transmission_baked_scale;  /* >= 0 (0: not baked): the back
 	                                    light already holds the slab's
 	                                    T(t) / T(0) for sss_options.
 	                                    radius_scale = this (the add-on's
-	                                    slab override, Thickness 0): T(0)
-	                                    is applied, and any other
+	                                    slab override): T(0) is applied
+	                                    whatever the thickness pass
+	                                    says, and any other
 	                                    radius_scale but 0 is refused, as
 	                                    T(t) could not follow it */
 

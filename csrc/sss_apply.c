@@ -85,6 +85,7 @@ typedef struct rows_ctx {
 	const sss__kernel *kernels;
 	const int16_t *by_index;
 	const sss__transmission *transmission;
+	const sss__thin *thin; /* thin parts lit from the front, or NULL */
 	double background_depth;
 	int32_t w, h;
 	const sss__projection *proj; /* for the view cosine of calibrations */
@@ -148,6 +149,9 @@ static void signal_rows(void *vctx, int32_t y0, int32_t y1)
 				for (int c = 0; c < 3; c++)
 					s[c] *= sqrtf(fmaxf(col[c], 0.0f));
 			}
+			/* a thin part lets some of it out at the back */
+			if (ctx->thin)
+				sss__thin_apply(ctx->thin, k, x, y, s);
 			if (!sss__isfinite3(s))
 				k = -1;
 			slot[i] = k;
@@ -649,6 +653,15 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	                                   out_diffuse_light, &transmission,
 	                                   errbuf, errbuf_len)))
 		return r;
+	/* Thin parts lit from the front (sss_thin.c): less of the light
+	 * entering them is reflected; NULL when no material asks. */
+	sss__thin *thin = NULL;
+	if ((r = sss__thin_prepare(p, materials, material_count, &opt,
+	                           cam->unit_scale, &thin, errbuf,
+	                           errbuf_len))) {
+		sss__transmission_free(transmission);
+		return r;
+	}
 
 	/* All allocations up front, one error path. */
 	size_t npix = (size_t)w * (size_t)h;
@@ -704,7 +717,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	rows_ctx rc = {
 		.p = p, .materials = materials, .kernels = kernels,
 		.by_index = by_index, .transmission = transmission,
-		.background_depth = opt.background_depth, .w = w, .h = h,
+		.thin = thin, .background_depth = opt.background_depth, .w = w, .h = h,
 		.proj = &job.proj, .signal = signal, .signal_px = job.signal_px,
 		.signal_ch = job.signal_ch, .slot = slot,
 		.out_combined = out_combined, .out_diffuse_light = out_diffuse_light,
@@ -780,6 +793,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	r = SSS_OK;
 done:
 	sss__transmission_free(transmission);
+	sss__thin_free(thin);
 	free(kernels);
 	free(by_index);
 	sss__ws_put(ws, slot);

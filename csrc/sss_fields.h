@@ -148,6 +148,9 @@ X("thickness_scale", thickness_scale, F32, ALL, TRANSMITS, 1.0f, 0, 0, \
 X("transmission_baked_scale", transmission_baked_scale, F32, ALL, \
   TRANSMITS, 0.0f, 0, 0, 0, SSS__BIG, 0, SSS__NO_NAMES, \
   "the radius scale the back light was baked at, 0 = not baked") \
+X("thin_reflectance", thin_reflectance, F32, ALL, ALWAYS, 0.0f, 0, 0, 0, \
+  1, 0, SSS__NO_NAMES, "share of the measured loss of light thin parts " \
+  "reflect (4.x Random Walk (Skin); needs the thickness pass)") \
 X("calibration", calibration, ENUM, ALL, ALWAYS, SSS_CALIBRATION_NONE, 0, \
   0, 0, 0, 0, SSS__NAMES(calibration), \
   "the random walk whose energy is matched")

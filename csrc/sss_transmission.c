@@ -78,6 +78,7 @@ typedef struct tmat {
 	 * the fast model, whose T follows the facing pass. */
 	int has_T0;
 	double T0[3];
+	int baked; /* transmission_baked_scale > 0 */
 } tmat;
 
 struct sss__transmission {
@@ -303,6 +304,7 @@ static void tmat_make(const sss_material *mat, const sss_options *opt,
 		m->colour[c] = mat->transmission_color[c];
 	}
 	m->thickness_scale = mat->thickness_scale;
+	m->baked = mat->transmission_baked_scale > 0.0f;
 	m->distance = (double)mat->transmission_distance * len;
 	m->distortion = mat->transmission_distortion;
 	m->power = mat->transmission_power;
@@ -725,7 +727,9 @@ void sss__transmission_add(const sss__transmission *t, int32_t m, int32_t x,
 	if (b[0] == 0.0 && b[1] == 0.0 && b[2] == 0.0)
 		return; /* no light from behind here: nothing to carry */
 	double facing = t->facing.data ? sss__at(&t->facing, x, y)[0] : 1.0;
-	double tt = mt->thickness_scale == 0.0 ? 0.0
+	/* a baked back light crossed the part already: T(0) whatever the
+	 * pass says (the thickness is there for sss_thin.c) */
+	double tt = mt->thickness_scale == 0.0 || mt->baked ? 0.0
 	            : thick * mt->thickness_scale;
 	double T[3];
 	if (tt == 0.0 && mt->has_T0)

@@ -210,25 +210,32 @@ def write_c(table, kind, path, info):
         f" * {name}, ln T4 at x = t / l (columns, x) and albedo (rows,",
         " * albedo), measured on Blender 4.5.15",
         f" * ({info}). */",
-        '#include "sss_transmission.h"', "",
-        "static const float x[SSS__WALK4_NX] = {"]
-    for k in range(0, len(X_NODES), 8):
-        lines.append("\t" + ", ".join(f"{v!r}f" for v in X_NODES[k:k + 8]) +
+        '#include "sss_transmission.h"', ""]
+    lines += c_arrays(X_NODES, "SSS__WALK4_NX", table, "ln_t", 5)
+    lines += ["", f"const sss__walk4_table sss__walk4_{kind} = "
+              "{x, albedo, ln_t};"]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def c_arrays(x_nodes, x_macro, table, name, digits):
+    """A generated table's C arrays: x (x_macro long), albedo (A_NODES)
+    and name[albedo][x] = table."""
+    lines = [f"static const float x[{x_macro}] = {{"]
+    for k in range(0, len(x_nodes), 8):
+        lines.append("\t" + ", ".join(f"{v!r}f" for v in x_nodes[k:k + 8]) +
                      ",")
     lines += ["};", "", "static const float albedo[SSS__WALK4_NA] = {"]
     lines += ["\t" + ", ".join(f"{v!r}f" for v in A_NODES) + ",", "};", ""]
-    lines.append("static const float ln_t[SSS__WALK4_NA][SSS__WALK4_NX] = {")
+    lines.append(f"static const float {name}[SSS__WALK4_NA][{x_macro}] = {{")
     for A, r in zip(A_NODES, table):
-        vals = [f"{v:.5f}f" for v in r]
+        vals = [f"{v:.{digits}f}f" for v in r]
         lines.append(f"\t{{ /* A {A:g} */")
         for k in range(0, len(vals), 6):
             lines.append("\t\t" + ", ".join(vals[k:k + 6]) + ",")
         lines.append("\t},")
     lines.append("};")
-    lines += ["", f"const sss__walk4_table sss__walk4_{kind} = "
-              "{x, albedo, ln_t};"]
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    return lines
 
 
 def write_h(pts, kind, path, rms, worst):

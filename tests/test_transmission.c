@@ -5,6 +5,7 @@
 #include "test_util.h"
 #include "transmission4_rw_measured.h"
 #include "transmission4_skin_measured.h"
+#include "thin4_skin_measured.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -1072,6 +1073,92 @@ static void test_walk4(const char *name, int kind, int slab_kind,
 	      fit_rms, worst, fit_worst);
 }
 
+/* Thin parts lit from the front (sss_thin.c): on the slab lit only in
+ * front, Random Walk (Skin) with thin_reflectance 1 over 0 follows the
+ * measured share of a thick part's light (tests/thin4_skin_measured.h)
+ * within the fit's residual; half of the loss at 0.5; nothing changes
+ * without the pass, at a NaN or negative thickness, for another walk, or
+ * at thin_reflectance 0; a baked back light still crosses at T(0). */
+static float thin_front(sss_material *m, float A, float share, float t,
+                        int pass, int c)
+{
+	char err[256];
+	for (int k = 0; k < 3; k++)
+		m->albedo[k] = A;
+	m->thin_reflectance = share;
+	slab_make(&S, 0.0f, t);
+	for (int i = 0; i < W * H * 3; i++)
+		S.dd[i] = 0.5f;
+	if (!pass)
+		S.p.thickness.data = NULL, S.p.back_dir.data = NULL;
+	if (run(&S, m, 1.0f, err, sizeof err))
+		return NAN;
+	return front(&S, c);
+}
+
+static void test_thin(void)
+{
+	size_t np = sizeof thin4_skin_measured / sizeof *thin4_skin_measured;
+	double sum = 0.0, worst = 0.0;
+	sss_material m = walk(WALK_SKIN, 0.5f);
+	for (size_t i = 0; i < np; i++) {
+		float A = (float)thin4_skin_measured[i][0];
+		sss_material q = walk(WALK_SKIN, A);
+		double s[3], a[3], zb[3];
+		sss_transmission_slab(&q, s, a, zb);
+		float t = (float)(thin4_skin_measured[i][1] * 1.5 * (a[0] - zb[0]));
+		double g = thin_front(&m, A, 1.0f, t, 1, 0) /
+		           thin_front(&m, A, 0.0f, t, 1, 0);
+		double e = fabs(g - thin4_skin_measured[i][2]);
+		sum += e * e;
+		worst = fmax(worst, e);
+	}
+	double rms = sqrt(sum / (double)np);
+	CHECK("thin.measured", np > 100 && rms <= THIN4_SKIN_FIT_RMS + 3e-3 &&
+	      worst <= THIN4_SKIN_FIT_WORST + 1e-2,
+	      "%zu points: RMS %g (fit %g), largest %g (fit %g)", np, rms,
+	      THIN4_SKIN_FIT_RMS, worst, THIN4_SKIN_FIT_WORST);
+
+	float full = thin_front(&m, 0.8f, 0.0f, 0.004f, 1, 0);
+	float one = thin_front(&m, 0.8f, 1.0f, 0.004f, 1, 0);
+	float half = thin_front(&m, 0.8f, 0.5f, 0.004f, 1, 0);
+	CHECK("thin.loses", one < 0.9f * full && one > 0.0f, "%g of %g",
+	      (double)one, (double)full);
+	CHECK("thin.half", fabsf(half - 0.5f * (one + full)) <= 1e-5f * full,
+	      "%g, %g, %g", (double)half, (double)one, (double)full);
+	CHECK("thin.thick", thin_front(&m, 0.8f, 1.0f, 10.0f, 1, 0) == full,
+	      "a thick part changed");
+	CHECK("thin.no-pass", thin_front(&m, 0.8f, 1.0f, 0.004f, 0, 0) ==
+	      thin_front(&m, 0.8f, 0.0f, 0.004f, 0, 0), "changed");
+	float bad[] = {NAN, -1.0f, INFINITY};
+	for (int k = 0; k < 3; k++)
+		CHECK("thin.bad-thickness", thin_front(&m, 0.8f, 1.0f, bad[k], 1, 0)
+		      == thin_front(&m, 0.8f, 0.0f, bad[k], 1, 0), "%g",
+		      (double)bad[k]);
+	sss_material m3 = walk(WALK_3X, 0.8f);
+	CHECK("thin.other-walk", thin_front(&m3, 0.8f, 1.0f, 0.004f, 1, 0) ==
+	      thin_front(&m3, 0.8f, 0.0f, 0.004f, 1, 0), "changed");
+
+	/* A baked back light: T(0) at any thickness the pass gives. */
+	char err[256];
+	sss_material b = walk(WALK_SKIN, 0.8f);
+	b.transmission_baked_scale = 1.0f;
+	float at0[3];
+	slab_make(&S, 1.0f, 0.0f);
+	CHECK_STATUS("thin.baked", SSS_OK, run(&S, &b, 1.0f, err, sizeof err));
+	for (int c = 0; c < 3; c++)
+		at0[c] = front(&S, c);
+	slab_make(&S, 1.0f, 0.01f);
+	CHECK_STATUS("thin.baked", SSS_OK, run(&S, &b, 1.0f, err, sizeof err));
+	CHECK("thin.baked-T0", front(&S, 0) == at0[0] && front(&S, 2) == at0[2],
+	      "%g against %g", (double)front(&S, 0), (double)at0[0]);
+	b.thin_reflectance = 2.0f;
+	CHECK_STATUS("thin.range", SSS_ERR_INVALID_ARGUMENT,
+	             sss_material_validate(&b, err, sizeof err));
+	CHECK("thin.range.msg", strstr(err, "thin_reflectance") != NULL, "%s",
+	      err);
+}
+
 int main(void)
 {
 	test_slab();
@@ -1083,6 +1170,7 @@ int main(void)
 	test_walk4("walk4rw", WALK_RW, WALK_RW_SLAB, walk4_rw_measured,
 	           sizeof walk4_rw_measured / sizeof *walk4_rw_measured,
 	           WALK4_RW_FIT_RMS, WALK4_RW_FIT_WORST);
+	test_thin();
 	test_models();
 	test_extremes();
 	test_validation();

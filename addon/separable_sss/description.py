@@ -23,8 +23,10 @@ def method_name(identifier):
 
 # The fields the add-on works out itself instead of offering them as
 # settings: the calibration follows Match Energy, the baked scale the
-# back-light layer (_with_baked).
-DERIVED = ("transmission_baked_scale", "calibration")
+# back-light layer (_with_baked). thin_reflectance stays the library's 0:
+# the layer's thickness is too coarse for it (docs/transmission.md, "Thin
+# parts lit from the front").
+DERIVED = ("transmission_baked_scale", "calibration", "thin_reflectance")
 
 # The setting a field is stored as where it is not the field's member
 # (the name .blend files and presets already hold).
