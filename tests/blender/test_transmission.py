@@ -236,7 +236,10 @@ def test_slab_objects_tagged_only_during_render(slab, tmp_path):
     def grab(scene_, *args):
         for obj in scene_.objects:
             if transmission.PROP_MODE in obj:
-                seen[obj.name] = [obj.get(p) for p in transmission.PROPS]
+                # copied: an array property's view dies with it
+                seen[obj.name] = [getattr(v, "to_list", lambda v=v: v)()
+                                  for v in (obj.get(p) for p in
+                                            transmission.PROPS)]
         seen["images"] = [i.name for i in bpy.data.images
                           if i.name.startswith(transmission.SLAB_IMAGE)]
     bpy.app.handlers.render_pre.append(grab)
@@ -246,12 +249,46 @@ def test_slab_objects_tagged_only_during_render(slab, tmp_path):
         bpy.app.handlers.render_pre.remove(grab)
     # The slab carries its table's row, step and scale, and the table is
     # an image; nothing is left afterwards.
-    mode, row, step, scale = seen["Cube"]
+    mode, row, step, scale, albedo = seen["Cube"]
     assert mode == 2.0 and row == 0.0 and step > 0.0 and scale > 0.0
+    # and the albedo with which it reflects where an exit point sees it
+    found = pipeline.analyse(scene).materials[0]
+    assert np.allclose(list(albedo), found.albedo or found.color)
     assert len(seen["images"]) == 1
     assert all(transmission.PROP_MODE not in o for o in scene.objects)
     assert not [i for i in bpy.data.images
                 if i.name.startswith(transmission.SLAB_IMAGE)]
+
+
+def test_light_reflected_onto_the_back_crosses(slab, tmp_path):
+    """Light that reaches a part's back only after a bounce off what lies
+    behind it crosses too, as in the random walk: the slab's light turned
+    away, towards a wall behind it; the layer's light on the slab follows
+    the wall's albedo (it was none at all before the surroundings
+    reflected in the layer)."""
+    scene = open_scene(slab, tmp_path)
+    light = bpy.data.objects["Back"]
+    light.location = (0.0, 0.3, 0.0)
+    light.rotation_euler = (1.5708, 0.0, 0.0)   # emits along +y, away
+    bpy.ops.mesh.primitive_plane_add(size=3.0, location=(0.0, 0.8, 0.0),
+                                     rotation=(1.5708, 0.0, 0.0))
+    wall = bpy.context.active_object
+    mat = bpy.data.materials.new("Wall")
+    compat.ensure_nodes(mat)
+    wall.data.materials.append(mat)
+    base = mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"]
+    back = {}
+    for albedo in (0.0, 0.9):
+        base.default_value = (albedo, albedo, albedo, 1.0)
+        job = pipeline.prepare_render(bpy.context)
+        inp = read_channels(job.input_exr)[0]
+        mask = np.rint(inp["ViewLayer.IndexMA.X"]) > 0
+        layer = transmission.LAYER
+        assert layer in {k.split(".")[0] for k in inp}
+        back[albedo] = sum(float(inp[f"{layer}.{p}.{c}"][mask].mean())
+                           for p in ("DiffDir", "DiffInd") for c in "RGB")
+    print("back light on the slab, wall albedo 0 / 0.9:", back)
+    assert back[0.9] > 20.0 * back[0.0] and back[0.9] > 1e-3
 
 
 @pytest.fixture(scope="module")
