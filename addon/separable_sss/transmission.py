@@ -457,7 +457,9 @@ def _tag_objects(scene, analysis, rows, undo):
         albedo = next((a for a in (_albedo(slot.material, albedos)
                                    for slot in obj.material_slots)
                        if a is not None), None)
-        had = {k: obj.get(k) for k in PROPS if k in obj}
+        # copied: an array property's value is a view that dies with it
+        had = {k: getattr(obj[k], "to_list", lambda k=k: obj[k])()
+               for k in PROPS if k in obj}
 
         def restore(obj=obj, had=had):
             for k in PROPS:

@@ -242,11 +242,16 @@ def test_slab_objects_tagged_only_during_render(slab, tmp_path):
                                             transmission.PROPS)]
         seen["images"] = [i.name for i in bpy.data.images
                           if i.name.startswith(transmission.SLAB_IMAGE)]
+    # A property of the same name the object had comes back as it was.
+    bpy.data.objects["Cube"][transmission.PROP_ALBEDO] = [0.1, 0.2, 0.3]
     bpy.app.handlers.render_pre.append(grab)
     try:
         pipeline.prepare_render(bpy.context)
     finally:
         bpy.app.handlers.render_pre.remove(grab)
+    own = bpy.data.objects["Cube"].get(transmission.PROP_ALBEDO).to_list()
+    assert np.allclose(own, [0.1, 0.2, 0.3])
+    del bpy.data.objects["Cube"][transmission.PROP_ALBEDO]
     # The slab carries its table's row, step and scale, and the table is
     # an image; nothing is left afterwards.
     mode, row, step, scale, albedo = seen["Cube"]
@@ -255,7 +260,7 @@ def test_slab_objects_tagged_only_during_render(slab, tmp_path):
     found = pipeline.analyse(scene).materials[0]
     assert np.allclose(list(albedo), found.albedo or found.color)
     assert len(seen["images"]) == 1
-    assert all(transmission.PROP_MODE not in o for o in scene.objects)
+    assert all(p not in o for o in scene.objects for p in transmission.PROPS)
     assert not [i for i in bpy.data.images
                 if i.name.startswith(transmission.SLAB_IMAGE)]
 
