@@ -35,12 +35,14 @@ struct sss__thin {
 	int32_t count;
 };
 
-/* Material m's measured table, or NULL. */
+/* The measured table material m asks for, or NULL: none measured for
+ * its walk, thin_reflectance 0 or the thickness scaled to nothing. */
 static const sss__thin_table *thin_table(const sss_material *mat)
 {
 	if (mat->kind == SSS_PROFILE_BURLEY &&
 	    mat->calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
-	    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK)
+	    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK &&
+	    mat->thin_reflectance > 0.0f && mat->thickness_scale > 0.0f)
 		return &sss__walk4_skin_thin;
 	return NULL;
 }
@@ -61,18 +63,13 @@ static double thin_row(const sss__thin_table *tb, int k, double x)
 static void thin_make(const sss_material *mat, const sss__thin_table *tb,
                       double len, thin_mat *m)
 {
-	const float *an = tb->albedo;
 	double s = mat->thin_reflectance;
 	double x_end = tb->x[SSS__THIN_NX - 1];
 	m->on = 0;
 	for (int c = 0; c < 3; c++) {
-		double A = mat->albedo[c];
-		double a = A < an[0] ? an[0] : A > an[SSS__WALK4_NA - 1]
-		           ? an[SSS__WALK4_NA - 1] : A;
-		int i = 0;
-		while (i < SSS__WALK4_NA - 2 && a >= an[i + 1])
-			i++;
-		double f = (a - an[i]) / (an[i + 1] - an[i]);
+		double A = mat->albedo[c], f;
+		int i;
+		sss__walk4_albedo_row(tb->albedo, A, &i, &f);
 		/* l in scene units, as the transmission's slab */
 		double l = (double)mat->radius[c] * len *
 		           sss__cycles_rw_mfp_over_radius(A);
@@ -106,8 +103,7 @@ sss_result sss__thin_prepare(const sss_passes *p,
 		return SSS_OK;
 	int any = 0;
 	for (int32_t m = 0; m < count && !any; m++)
-		any = materials[m].thin_reflectance > 0.0f &&
-		      materials[m].thickness_scale > 0.0f && thin_table(&materials[m]);
+		any = thin_table(&materials[m]) != NULL;
 	if (!any)
 		return SSS_OK;
 	sss__thin *t = calloc(1, sizeof *t);
@@ -124,8 +120,7 @@ sss_result sss__thin_prepare(const sss_passes *p,
 	for (int32_t m = 0; m < count; m++) {
 		const sss_material *mat = &materials[m];
 		const sss__thin_table *tb = thin_table(mat);
-		if (!tb || !(mat->thin_reflectance > 0.0f) ||
-		    !(mat->thickness_scale > 0.0f))
+		if (!tb)
 			continue;
 		if (!(mats[m] = malloc(sizeof **mats))) {
 			sss__thin_free(t);

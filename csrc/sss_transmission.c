@@ -230,18 +230,25 @@ static const sss__walk4_table *walk4_table(const sss_material *mat)
 	return NULL;
 }
 
-static void walk4_make(tmat *m, int c, double A,
-                       const sss__walk4_table *table)
+void sss__walk4_albedo_row(const float *an, double A, int *row, double *f)
 {
-	const float *an = table->albedo;
 	double a = A < an[0] ? an[0] : A > an[SSS__WALK4_NA - 1]
 	           ? an[SSS__WALK4_NA - 1] : A;
 	int i = 0;
 	while (i < SSS__WALK4_NA - 2 && a >= an[i + 1])
 		i++;
+	*row = i;
+	*f = (a - an[i]) / (an[i + 1] - an[i]);
+}
+
+static void walk4_make(tmat *m, int c, double A,
+                       const sss__walk4_table *table)
+{
+	const float *an = table->albedo;
+	int i;
+	sss__walk4_albedo_row(an, A, &i, &m->w4f[c]);
 	m->walk4[c] = table;
 	m->w4row[c] = i;
-	m->w4f[c] = (a - an[i]) / (an[i + 1] - an[i]);
 	for (int k = 0; k < 2; k++) {
 		double *u = m->w4unit[c][k];
 		slab_make(1.0, an[i + k], &u[0], &u[1], &u[2]);

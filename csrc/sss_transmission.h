@@ -47,6 +47,12 @@ typedef struct sss__walk4_table {
 } sss__walk4_table;
 extern const sss__walk4_table sss__walk4_skin, sss__walk4_rw;
 
+/* The row of a table's albedos (SSS__WALK4_NA, rising) at or below A and
+ * A's place towards the next, f in [0, 1]; outside the rows the nearest
+ * row's end. Shared by the walk's transmittance and thin-part tables. */
+void sss__walk4_albedo_row(const float *albedo, double A, int *row,
+                           double *f);
+
 /* Thin parts lit from the front (sss_thin.c): how much of a thick part's
  * light a part of thickness t reflects in Blender 4.x's Random Walk
  * (Skin), G = R(t) / R(inf), measured on 4.5.15 (sss_walk4_skin_thin_

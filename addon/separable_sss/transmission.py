@@ -425,9 +425,8 @@ def _albedo(material, albedos):
         return None
     for node in material.node_tree.nodes:
         if node.type in ("BSDF_PRINCIPLED", "BSDF_DIFFUSE"):
-            sock = node.inputs.get(compat.PRINCIPLED["base"]
-                                   if node.type == "BSDF_PRINCIPLED"
-                                   else "Color")
+            sock = compat.principled_input(node, "base") \
+                if node.type == "BSDF_PRINCIPLED" else node.inputs.get("Color")
             if sock is None or sock.is_linked:
                 return None
             return tuple(sock.default_value[:3])
