@@ -82,6 +82,29 @@ def test_a_sharp_convex_edge_is_an_edge_not_a_crevice():
     assert rows["crevices"]["share"] == 0.0
 
 
+def test_a_pixel_over_two_faces_marks_an_edge():
+    """The curvature misses the edge (flat); the averaged normal of the
+    pixels on it, shorter than one, tells."""
+    ref, idx, depth, mask, flat = frame()
+    idx[:] = 1
+    normal = np.zeros(ref.shape)
+    normal[..., 2] = 1.0
+    # one column half on a face turned 90 degrees: length 0.707
+    normal[:, 21] = [0.5, 0.0, 0.5]
+    ours = ref.copy()
+    rng = np.random.default_rng(4)   # in the blocks holding it
+    ours[:, 20:24] += rng.normal(0, 0.05, (ref.shape[0], 4, 3))
+    faces = eb.two_faces(normal, mask)
+    assert faces.sum() == ref.shape[0] and faces[:, 21].all()
+    rows, cause, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth,
+                               flat, flat, None, faces)
+    assert rows["edges"]["share"] > 0.95
+    assert (cause == eb.CAUSES.index("edges")).sum() == ref.shape[0] // 4
+    rows, _, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth, flat,
+                           flat)
+    assert rows["rest"]["share"] > 0.95
+
+
 def test_the_render_without_sss_is_measured_in_the_same_blocks():
     ref, idx, depth, mask, flat = frame()
     w = ref.shape[1]
