@@ -33,7 +33,9 @@ texture: the box with a striped Base Color (a checker texture) under the
   sun, random walk against SSS-off + libsss with post and pre-and-post
   texturing. Written to DIR/texture.csv.
 crease: the box's top edge (a sharp 90-degree convex edge) seen at 45
-  degrees by the orthographic camera, its front face under a sun at
+  degrees (--crease-view: the angle between the camera's axis and the
+  top face's normal; the front face is seen at 90 degrees less) by the
+  orthographic camera, its front face under a sun at
   normal incidence and its top face unlit (the sun grazes it): the random
   walk against the SSS-off render scattered by libsss with this Blender's
   measured mapping and calibration, without the crease term (scene
@@ -111,6 +113,9 @@ def parse_args():
                    "axis), comma-separated")
     p.add_argument("--view", type=float, default=0.2,
                    help="metres of the face the camera sees")
+    p.add_argument("--crease-view", type=float, default=45.0,
+                   help="crease: degrees between the camera's axis and the "
+                   "unlit top face's normal")
     p.add_argument("--albedos", help="override: a,b,c;d,e,f")
     p.add_argument("--shape-x", default=",".join(f"{x:g}" for x in SHAPE_X),
                    help="shape: the radii over the sphere's radius")
@@ -124,6 +129,9 @@ def parse_args():
         p.error(f"--view-angles: {e}")
     if not all(0.0 <= a < 90.0 for a in args.view_angles):
         p.error("--view-angles: each in [0, 90) degrees")
+    if not 5.0 <= args.crease_view <= 85.0:
+        p.error(f"--crease-view {args.crease_view}: from 5 to 85 degrees "
+                "(both faces seen)")
     args.out = os.path.abspath(args.out)
     global VIEW
     VIEW = args.view
@@ -535,13 +543,16 @@ def part_texture(args):
 
 # --------------------------------------------------------------- crease
 
-def edge_camera(scene):
-    """The orthographic camera looking down at 45 degrees on the box's
-    top front edge (y = 0, z = 3), which runs across the frame's middle:
-    the unlit top face above it, the lit front face below."""
+def edge_camera(scene, degrees=45.0):
+    """The orthographic camera looking down on the box's top front edge
+    (y = 0, z = 3), which runs across the frame's middle, its axis
+    `degrees` from the top face's normal: the unlit top face above the
+    edge, the lit front face below."""
     cam = scene.camera
-    cam.location = (0.0, -5.0, 8.0)
-    cam.rotation_euler = (math.pi / 4, 0.0, 0.0)
+    a = math.radians(degrees)
+    d = math.sqrt(50.0)   # as far as at 45 degrees, (0, -5, 8)
+    cam.location = (0.0, -d * math.sin(a), 3.0 + d * math.cos(a))
+    cam.rotation_euler = (a, 0.0, 0.0)
 
 
 def part_crease(args):
@@ -553,7 +564,7 @@ def part_crease(args):
     for radius in args.radii:
         for albedo in albedo_sets(args):
             scene = reset()
-            edge_camera(scene)
+            edge_camera(scene, args.crease_view)
             _, mat = slab(scene)
             world(scene, 0.0)
             sun(scene)
@@ -576,9 +587,12 @@ def part_crease(args):
             cols = slice(n // 4, 3 * n // 4)
             prw, pours, poff, pcrease = (img[:, cols].mean(axis=1)
                                          for img in (rw, ours, off, creased))
-            # Screen metres from the edge (frame middle), up positive; on
-            # the top face t = u / cos 45.
+            # Screen metres from the edge (frame middle), up positive; t
+            # along the face: u / cos(view) on the top face, u / sin(view)
+            # on the front face.
             u = (n / 2 - (np.arange(n) + 0.5)) / n * VIEW
+            a = math.radians(args.crease_view)
+            t = np.where(u > 0, u / math.cos(a), u / math.sin(a))
             lit = pours[-n // 8:].mean(axis=0)
             bd = native.burley_d({"profile": "burley", "radius": [radius] * 3,
                                   "mapping": mapping,
@@ -587,7 +601,8 @@ def part_crease(args):
                 for c in range(3):
                     rows.append(dict(method=args.method, radius=radius,
                                      albedo=albedo[c], d=bd[c],
-                                     t=float(u[i] * math.sqrt(2.0)),
+                                     view=args.crease_view,
+                                     t=float(t[i]),
                                      rw=float(prw[i, c] / lit[c]),
                                      ours=float(pours[i, c] / lit[c]),
                                      crease=float(pcrease[i, c] / lit[c]),
