@@ -39,10 +39,12 @@ crease: the box's top edge (a sharp 90-degree convex edge) seen at 45
   normal incidence and its top face unlit (the sun grazes it): the random
   walk against the SSS-off render scattered by libsss with this Blender's
   measured mapping and calibration, without the crease term (scene
-  "crease": 0: what the walk carries over the edge that the screen-space
-  blur does not, which the term's table was fitted to) and with it, per
-  row of the frame (t: metres along the top face from the edge), over
-  the scattered front face's plateau. Written to DIR/crease_METHOD.csv.
+  "crease": 0), with it (1), and with the blur stopped at the edge but
+  nothing carried over (2: what the term of a walk whose blur stops
+  there is fitted against: the walk's gain on the top face, its loss on
+  the front face), per row of the frame (t: metres along each face from
+  the edge, negative on the front face), over the scattered front face's
+  plateau. Written to DIR/crease_METHOD.csv.
 shape: a sphere of radius 4 cm (128 x 64 segments, smooth) seen head-on by
   an orthographic camera 12 cm wide, under a sun along the view, with the
   radius r = x a for each x of SHAPE_X (x: the radius times the sphere's
@@ -571,22 +573,25 @@ def part_crease(args):
             setup_render(scene, args, None)
             rw, off, inp = walk_and_off(scene, mat, albedo, radius, args,
                                         "crease")
-            # Without the crease term (what its table is fitted to), and
-            # with it, as the library ships it.
+            # Without the crease term, with it as the library ships it,
+            # and with the blur stopped at the edge but nothing carried
+            # over (what the term is fitted against, for the walks whose
+            # blur stops there).
             images = []
-            for crease in (0, 1):
+            for crease in (0, 1, 2):
                 desc = inp.replace(".exr", f"_crease{crease}.json")
                 scene_json(desc, albedo, radius, mapping,
                            calibration=calibration, method="separable",
                            taps=33, crease=crease)
                 images.append(scatter(inp, desc, desc.replace(".json",
                                                               "_sss.exr")))
-            ours, creased = images
+            ours, creased, stopped = images
             # Rows top to bottom: the top face, then the front face; one
             # value per row over the middle half of the columns.
             cols = slice(n // 4, 3 * n // 4)
-            prw, pours, poff, pcrease = (img[:, cols].mean(axis=1)
-                                         for img in (rw, ours, off, creased))
+            prw, pours, poff, pcrease, pstop = (
+                img[:, cols].mean(axis=1)
+                for img in (rw, ours, off, creased, stopped))
             # Screen metres from the edge (frame middle), up positive; t
             # along the face: u / cos(view) on the top face, u / sin(view)
             # on the front face.
@@ -606,6 +611,7 @@ def part_crease(args):
                                      rw=float(prw[i, c] / lit[c]),
                                      ours=float(pours[i, c] / lit[c]),
                                      crease=float(pcrease[i, c] / lit[c]),
+                                     stopped=float(pstop[i, c] / lit[c]),
                                      off=float(poff[i, c] / lit[c])))
             log(f"crease r={radius} A={albedo}: done")
     write_csv(os.path.join(args.out, f"crease_{args.method.lower()}.csv"),

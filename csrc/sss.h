@@ -559,7 +559,11 @@ typedef struct sss_options {
 	int32_t crease;          /* 1 (default): a calibrated material also
 	                            carries light over sharp convex edges
 	                            onto the next face, as the walk does;
-	                            0: not (what its measurement compares) */
+	                            0: not (what its measurement compares);
+	                            2: the separable blur stops at them, as
+	                            with 1, but nothing is carried over
+	                            (what the lit face's loss is fitted
+	                            against) */
 } sss_options;
 
 /* sss_options_default's taps, and what a material's taps 0 means. */

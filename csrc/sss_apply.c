@@ -391,9 +391,11 @@ static sss_result view_plane(rows_ctx *rc, sss__workspace *ws,
  * blur: *out is NULL when no material takes it. */
 static sss_result crease_before(const rows_ctx *rc, const sss__job *job,
                                 int32_t material_count,
-                                const sss_options *opt, float **out)
+                                const sss_options *opt, float **out,
+                                uint8_t **breaks)
 {
 	*out = NULL;
+	*breaks = NULL;
 	uint8_t *enabled = calloc(material_count, 1);
 	int32_t *calibration = malloc(material_count * sizeof *calibration);
 	sss_result r = enabled && calibration ? SSS_OK : SSS_ERR_OUT_OF_MEMORY;
@@ -408,14 +410,20 @@ static sss_result crease_before(const rows_ctx *rc, const sss__job *job,
 	}
 	size_t npix = (size_t)job->width * job->height;
 	if (!r && any) {
-		if (!(*out = sss__ws_get(job->ws, SSS__WS_CREASE,
-		                         npix * 3 * sizeof **out, 0)))
+		*out = sss__ws_get(job->ws, SSS__WS_CREASE, npix * 3 * sizeof **out,
+		                   0);
+		*breaks = sss__ws_get(job->ws, SSS__WS_BREAKS, npix, 0);
+		if (!*out || !*breaks)
 			r = SSS_ERR_OUT_OF_MEMORY;
-		else if ((r = sss__crease(job, material_count, &rc->p->diff_col,
-		                          enabled, calibration, opt->num_threads,
-		                          *out))) {
+		else
+			r = sss__crease(job, material_count, &rc->p->diff_col,
+			                enabled, calibration, opt->num_threads, *out,
+			                *breaks, opt->crease == 1);
+		if (r) {
 			sss__ws_put(job->ws, *out);
+			sss__ws_put(job->ws, *breaks);
 			*out = NULL;
+			*breaks = NULL;
 		}
 	}
 	free(enabled);
@@ -677,6 +685,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	float *own_scratch = NULL;
 	float *curvature = NULL; /* allocated below, once kernels tell */
 	float *crease = NULL;    /* likewise */
+	uint8_t *breaks = NULL;  /* where creases part the faces */
 	float *median_x = NULL;  /* likewise */
 	if (!scratch)
 		scratch = own_scratch = sss__ws_get(ws, SSS__WS_SCRATCH,
@@ -741,11 +750,13 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 	rc.curvature = curvature;
 	sss__parallel_rows(h, opt.num_threads, signal_rows, &rc);
 	if (opt.crease && material_count > 0 &&
-	    (r = crease_before(&rc, &job, material_count, &opt, &crease))) {
+	    (r = crease_before(&rc, &job, material_count, &opt, &crease,
+	                       &breaks))) {
 		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
 		goto done;
 	}
 
+	job.breaks = breaks;
 	if (material_count > 0) {
 		r = run_method(&job, &rc, p, materials, material_count, &opt,
 		               method_of);
@@ -800,6 +811,7 @@ done:
 	sss__ws_put(ws, signal);
 	free(curvature);
 	sss__ws_put(ws, crease);
+	sss__ws_put(ws, breaks);
 	free(median_x);
 	sss__ws_put(ws, own_scratch);
 	free(zrange);

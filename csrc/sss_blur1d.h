@@ -30,12 +30,13 @@ typedef struct sss__blur1d {
 	/* The row, every array indexed by the position along it. */
 	const float *rgb[3];   /* light, planar; 0 where nothing scatters */
 	const float *z;        /* depth */
-	const int32_t *slot;   /* kernel per pixel, -1 = does not scatter */
+	const int32_t *slot;   /* kernel per pixel (and, above bit 16, its
+	                          face between creases), -1 = does not scatter */
 	int32_t i;             /* the centre pixel */
 	int32_t len;           /* pixels in the row */
 	int64_t readable;      /* elements every array holds from the row start */
 	int32_t s_lo, s_hi;    /* sample offsets from the centre, inclusive */
-	int16_t slot_c;
+	int32_t slot_c;
 	float zc;              /* centre depth */
 	/* The sample's position along the axis relative to the principal
 	 * point is (i + s) + off_axis pixels; ife = 1/f_axis for a perspective

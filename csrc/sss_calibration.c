@@ -682,14 +682,22 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
  *    as A kappa, which is nearly flat at low albedo (Skin: 0.50 - 0.57
  *    up to A = 0.6). Checked at r = 5 cm (Skin): the walk's excess on
  *    the unlit face, RMS 0.02 - 0.23 of the lit face from A = 0.99 down
- *    to 0.3 (1.55 at 0.05), is 0.003 - 0.012 with the term (0.09). */
+ *    to 0.3 (1.55 at 0.05), is 0.003 - 0.012 with the term (0.09).
+ *    The blur's own share across the edge depends on the view (the
+ *    unlit face seen head-on takes a fifth of what it takes at 70
+ *    degrees), the walk's does not: so for Random Walk (Skin) the
+ *    separable blur stops at creases (crease_loss_* below has its row)
+ *    and its row here is fitted over that stopped blur (calibrate.py
+ *    --part crease, its `stopped` column; fit_crease.py), the whole of
+ *    what crosses. The other rows were fitted over the blur at 45
+ *    degrees, their blur still crossing. */
 static const float crease_kappa[][CAL_N] = {
 	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
 		19.92f, 19.92f, 9.975f, 5.033f, 3.241f, 2.327f, 1.740f, 1.317f,
 		0.981f, 0.663f, 0.444f, 0.317f, 0.322f, 0.308f, 0.308f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
-		9.914f, 9.914f, 5.136f, 2.748f, 1.909f, 1.428f, 1.137f, 0.876f,
-		0.639f, 0.450f, 0.292f, 0.205f, 0.217f, 0.216f, 0.216f, 0.0f},
+		11.897f, 11.897f, 6.690f, 4.010f, 3.088f, 2.558f, 2.195f, 1.897f,
+		1.644f, 1.426f, 1.204f, 1.037f, 1.004f, 1.018f, 1.018f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
 		0.676f, 0.676f, 0.657f, 0.544f, 0.512f, 0.436f, 0.385f, 0.341f,
 		0.280f, 0.155f, 0.104f, 0.082f, 0.074f, 0.074f, 0.074f, 0.074f},
@@ -699,22 +707,38 @@ static const float crease_gamma[][CAL_N] = {
 		0.41f, 0.41f, 0.37f, 0.30f, 0.25f, 0.21f, 0.18f, 0.15f,
 		0.14f, 0.13f, 0.13f, 0.11f, 0.12f, 0.12f, 0.12f, 0.12f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
-		0.42f, 0.42f, 0.38f, 0.31f, 0.25f, 0.21f, 0.17f, 0.15f,
-		0.16f, 0.15f, 0.16f, 0.13f, 0.14f, 0.15f, 0.15f, 0.15f},
+		0.41f, 0.41f, 0.37f, 0.31f, 0.26f, 0.22f, 0.19f, 0.17f,
+		0.15f, 0.11f, 0.095f, 0.065f, 0.07f, 0.07f, 0.07f, 0.07f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
 		0.03f, 0.03f, 0.03f, 0.035f, 0.04f, 0.05f, 0.06f, 0.08f,
 		0.12f, 0.25f, 0.50f, 0.70f, 0.80f, 0.80f, 0.80f, 0.80f},
 };
 #define CREASE_ROWS ((int32_t)(sizeof crease_kappa / sizeof *crease_kappa))
+/* With the blur stopped at creases (the calibrations that have these
+ * rows): what the lit face loses near the edge, kappa F(t) of its own
+ * light, fitted like the gain on the lit face's profile. */
+static const float crease_loss_kappa[][CAL_N] = {
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
+		4.499f, 4.499f, 2.603f, 1.677f, 1.403f, 1.254f, 1.136f, 1.091f,
+		1.063f, 0.936f, 0.877f, 0.756f, 0.779f, 0.728f, 0.728f, 0.0f},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {0},
+};
+static const float crease_loss_gamma[][CAL_N] = {
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
+		0.34f, 0.34f, 0.35f, 0.34f, 0.31f, 0.27f, 0.24f, 0.21f,
+		0.17f, 0.12f, 0.11f, 0.07f, 0.07f, 0.08f, 0.08f, 0.08f},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {0},
+};
 
-void sss__crease_params(int32_t calibration, float albedo, float *kappa,
-                        float *gamma)
+static void crease_row(const float (*kt)[CAL_N], const float (*gt)[CAL_N],
+                       int32_t calibration, float albedo, float *kappa,
+                       float *gamma)
 {
 	*kappa = *gamma = 0.0f;
 	if (!is_calibration(calibration) || calibration >= CREASE_ROWS ||
-	    !(crease_gamma[calibration][1] > 0.0f) || !isfinite(albedo))
+	    !(gt[calibration][1] > 0.0f) || !isfinite(albedo))
 		return;
-	const float *k = crease_kappa[calibration];
+	const float *k = kt[calibration];
 	float a = albedo < cal_albedo[1] ? cal_albedo[1]
 	          : albedo > 1.0f ? 1.0f : albedo, t;
 	int i = interval(a, 2, &t);
@@ -722,7 +746,21 @@ void sss__crease_params(int32_t calibration, float albedo, float *kappa,
 		i = 2, t = 0.0f;
 	float q0 = cal_albedo[i - 1] * k[i - 1], q1 = cal_albedo[i] * k[i];
 	*kappa = (q0 + t * (q1 - q0)) / a;
-	*gamma = lerp_table(crease_gamma[calibration], a);
+	*gamma = lerp_table(gt[calibration], a);
+}
+
+void sss__crease_params(int32_t calibration, float albedo, float *kappa,
+                        float *gamma)
+{
+	crease_row(crease_kappa, crease_gamma, calibration, albedo, kappa,
+	           gamma);
+}
+
+void sss__crease_loss_params(int32_t calibration, float albedo, float *kappa,
+                             float *gamma)
+{
+	crease_row(crease_loss_kappa, crease_loss_gamma, calibration, albedo,
+	           kappa, gamma);
 }
 
 /* Cycles 3.4, bssrdf.h: Jensen's dipole reflectance with a boundary of

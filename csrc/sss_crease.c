@@ -28,6 +28,13 @@
  * edge, w the lit face's width (a face narrower than the radius sends at
  * most what entered it). For a lit face the sum is the measured profile
  * whatever the pixel size.
+ *
+ * For the calibrations whose lit face has a measured loss
+ * (sss__crease_loss_params: Random Walk (Skin)), the separable blur
+ * stops at each crease (breaks: the pixel pairs it parts) and each pixel
+ * also loses the loss's kappa F(t) of its own light, F with the loss's
+ * d: the light that leaves through the other face. Then the result is
+ * the same from any view (the blur's own share across an edge was not).
  */
 #include "sss_internal.h"
 
@@ -68,6 +75,8 @@ typedef struct crease_ctx {
 	                                 sources in the tiles above and left */
 	const crease_source *sources; /* by tile */
 	float *extra;                 /* 3 per pixel, packed */
+	uint8_t *breaks;              /* per pixel: SSS__BREAK_*, or NULL */
+	int term;                     /* 0: the light over the edges left out */
 	int receive_known;            /* near[] holds CAN_RECEIVE */
 	double u_node[CREASE_TABLE];  /* Burley d = 1 */
 	double G[CREASE_TABLE];       /* integral of F over [0, u] */
@@ -366,6 +375,71 @@ static void detect_rows(void *vctx, int32_t y0, int32_t y1)
 		}
 }
 
+static double face_extent(const crease_ctx *ctx, int32_t x, int32_t y,
+                          int dir, const double P[3], const double n[3]);
+
+/* Whether a crease parts pixel i from its neighbour j (dir) for the blur:
+ * the test detect_rows makes, for the pair itself, either of them bent,
+ * and both faces going on from the edge at least as far as the
+ * material's widest radius (with a radius larger than the faces the walk
+ * carries light round the whole object, as the blur does). */
+static int parted(const crease_ctx *ctx, size_t i, int32_t x, int32_t y,
+                  int dir)
+{
+	const sss__job *job = ctx->job;
+	int32_t w = job->width, h = job->height;
+	int32_t qx = x + step_x[dir], qy = y + step_y[dir];
+	if (qx >= w || qy >= h)
+		return 0;
+	size_t j = (size_t)qy * w + qx;
+	int16_t k = job->slot[i];
+	if (job->slot[j] != k || !((ctx->near[i] | ctx->near[j]) & BENT) ||
+	    !(ctx->near[i] & NEAR_BENT) || !(ctx->near[j] & NEAR_BENT) ||
+	    isnan(ctx->nrm[3 * i]) || isnan(ctx->nrm[3 * j]))
+		return 0;
+	double P[3], Q[3], n[3], m[3], D[3];
+	load3(ctx->pos + 3 * i, P);
+	load3(ctx->pos + 3 * j, Q);
+	load3(ctx->nrm + 3 * i, n);
+	load3(ctx->nrm + 3 * j, m);
+	if (!(dot3(n, m) < CREASE_MIN_COS))
+		return 0;
+	for (int c = 0; c < 3; c++)
+		D[c] = Q[c] - P[c];
+	if (!(dot3(D, n) < 0.0 && dot3(D, m) > 0.0 &&
+	      flat_at(ctx, k, x - step_x[dir], y - step_y[dir], n) &&
+	      flat_at(ctx, k, qx + step_x[dir], qy + step_y[dir], m)))
+		return 0;
+	const float *wr = job->kernels[k].walk_radius;
+	double widest = fmax(wr[0], fmax(wr[1], wr[2]));
+	return face_extent(ctx, x, y, dir, P, n) >= widest &&
+	       face_extent(ctx, qx, qy, (dir + 4) % 8, Q, m) >= widest;
+}
+
+static void break_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	crease_ctx *ctx = vctx;
+	const sss__job *job = ctx->job;
+	int32_t w = job->width;
+	for (int32_t y = y0; y < y1; y++)
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			uint8_t b = 0;
+			int16_t k = job->slot[i];
+			float lk, lg;
+			if (k >= 0)
+				sss__crease_loss_params(ctx->calibration[k], 0.5f, &lk, &lg);
+			if (k >= 0 && ctx->enabled[k] && lk > 0.0f &&
+			    (ctx->near[i] & NEAR_BENT)) {
+				if (parted(ctx, i, x, y, 0))
+					b |= SSS__BREAK_RIGHT;
+				if (parted(ctx, i, x, y, 2))
+					b |= SSS__BREAK_DOWN;
+			}
+			ctx->breaks[i] = b;
+		}
+}
+
 /* The signal of pixel j, channel c. */
 static float signal_at(const sss__job *job, size_t j, int c)
 {
@@ -609,7 +683,7 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 			if (!sources_near(ctx, x, y, reach_px(ctx, ctx->reach[k], pix)))
 				continue;
 			const float *col = sss__at(ctx->diff_col, x, y);
-			double kappa[3], d[3], dmax = 0.0;
+			double kappa[3], d[3], lkappa[3], ld[3], dmax = 0.0;
 			for (int c = 0; c < 3; c++) {
 				float kap, gam;
 				sss__crease_params(ctx->calibration[k], col[c], &kap,
@@ -619,6 +693,13 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 				d[c] = (double)gam * ker->walk_radius[c];
 				if (kappa[c] > 0.0 && d[c] > dmax)
 					dmax = d[c];
+				sss__crease_loss_params(ctx->calibration[k], col[c], &kap,
+				                        &gam);
+				lkappa[c] = (double)kap * ker->mix[c] *
+				            ker->calibration_fade[c];
+				ld[c] = (double)gam * ker->walk_radius[c];
+				if (lkappa[c] > 0.0 && ld[c] > dmax)
+					dmax = ld[c];
 			}
 			if (!(dmax > 0.0))
 				continue;
@@ -667,23 +748,35 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 					e = end;
 				}
 			}
-			if (!(W > 0.0))
+			if (!(W > 0.0) || !ctx->term)
 				continue;
 			double tm = WT / W, face = WS / W;
 			double extent = pix / facing(ctx, i, n);
 			float *out = ctx->extra + 3 * i;
+			double a = fmax(tm - 0.5 * extent, 0.0), b = tm + 0.5 * extent;
 			for (int c = 0; c < 3; c++) {
-				if (!(kappa[c] > 0.0 && d[c] > 0.0))
-					continue;
-				double a = fmax(tm - 0.5 * extent, 0.0),
-				       b = tm + 0.5 * extent;
-				/* from sources at [0, face] from the edge: F(t) -
-				 * F(t + face) */
-				double u = 1.0 / d[c], f = face * u;
-				double mean_F = d[c] * (G_at(ctx, b * u) - G_at(ctx, a * u) -
-				                        G_at(ctx, b * u + f) +
-				                        G_at(ctx, a * u + f)) / extent;
-				out[c] = (float)(kappa[c] * mean_F * WL[c] / W);
+				double v = 0.0;
+				if (kappa[c] > 0.0 && d[c] > 0.0) {
+					/* from sources at [0, face] from the edge: F(t) -
+					 * F(t + face) */
+					double u = 1.0 / d[c], f = face * u;
+					double mean_F = d[c] * (G_at(ctx, b * u) -
+					                        G_at(ctx, a * u) -
+					                        G_at(ctx, b * u + f) +
+					                        G_at(ctx, a * u + f)) / extent;
+					v += kappa[c] * mean_F * WL[c] / W;
+				}
+				if (lkappa[c] > 0.0 && ld[c] > 0.0) {
+					/* its own light that leaves through the other face,
+					 * [0, face] wide */
+					double u = 1.0 / ld[c], f = face * u;
+					double mean_F = ld[c] * (G_at(ctx, b * u) -
+					                         G_at(ctx, a * u) -
+					                         G_at(ctx, b * u + f) +
+					                         G_at(ctx, a * u + f)) / extent;
+					v -= lkappa[c] * mean_F * signal_at(job, i, c);
+				}
+				out[c] = (float)v;
 			}
 		}
 }
@@ -755,7 +848,7 @@ static sss_result geometry_keep(const sss__job *job, int32_t kernel_count,
 sss_result sss__crease(const sss__job *job, int32_t kernel_count,
                        const sss_image *diff_col, const uint8_t *enabled,
                        const int32_t *calibration, int32_t num_threads,
-                       float *extra)
+                       float *extra, uint8_t *breaks, int term)
 {
 	size_t npix = (size_t)job->width * job->height;
 	double *reach = malloc((kernel_count ? kernel_count : 1) * sizeof *reach);
@@ -764,6 +857,9 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		float widest = 0.0f, kappa, gamma;
 		for (int a = 0; a <= 100; a++) {
 			sss__crease_params(calibration[k], 0.01f * a, &kappa, &gamma);
+			widest = fmaxf(widest, gamma);
+			sss__crease_loss_params(calibration[k], 0.01f * a, &kappa,
+			                        &gamma);
 			widest = fmaxf(widest, gamma);
 		}
 		const float *wr = job->kernels[k].walk_radius;
@@ -794,7 +890,8 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		*ctx = (crease_ctx){.job = job, .diff_col = diff_col,
 		                    .enabled = enabled, .calibration = calibration,
 		                    .reach = reach, .pos = pos, .nrm = nrm,
-		                    .near = near, .across = across, .extra = extra};
+		                    .near = near, .across = across, .extra = extra,
+		                    .breaks = breaks, .term = term};
 		tabulate(ctx);
 		memset(extra, 0, npix * 3 * sizeof *extra);
 		if (!kept) {
@@ -809,6 +906,12 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 		mark_near(ctx);
 		sss__parallel_rows(job->height, num_threads, normal_rows, ctx);
 		sss__parallel_rows(job->height, num_threads, detect_rows, ctx);
+	}
+	if (!r && breaks) {
+		if (bent)
+			sss__parallel_rows(job->height, num_threads, break_rows, ctx);
+		else
+			memset(breaks, 0, npix);
 	}
 	if (!r && job->ws && !kept)
 		r = geometry_keep(job, kernel_count, enabled);

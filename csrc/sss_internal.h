@@ -60,6 +60,7 @@ enum {
 	SSS__WS_VIEW_SLOT, /* sss_apply: the slot map it was made with */
 	SSS__WS_VIEW_KEY,  /* sss_apply: and the camera */
 	SSS__WS_PLANE_SLOT, /* separable: the slot map its planes hold */
+	SSS__WS_BREAKS,    /* sss_apply: where creases part the faces */
 	SSS__WS_BLOCKS
 };
 sss__workspace *sss__workspace_new(void);
@@ -104,7 +105,14 @@ typedef struct sss__job {
 	 * overwrites it), else allocated. */
 	float *scratch;
 	sss__workspace *ws; /* kept working memory, or NULL */
+	/* Per pixel, where a crease (sss_crease.c) lies between it and its
+	 * neighbour: SSS__BREAK_RIGHT, SSS__BREAK_DOWN; NULL: nowhere. The
+	 * separable method carries no light across one (the crease term does). */
+	const uint8_t *breaks;
 } sss__job;
+
+#define SSS__BREAK_RIGHT 1u
+#define SSS__BREAK_DOWN 2u
 
 /* "a directory", "a FIFO (named pipe)", ...: what a stat mode names, for
  * messages that refuse a file (sss_status.c). */
@@ -207,6 +215,11 @@ float sss__shape_gain(int32_t calibration, float albedo, float x);
  * d = gamma x the walk's radius; kappa 0 for calibrations without it. */
 void sss__crease_params(int32_t calibration, float albedo, float *kappa,
                         float *gamma);
+/* What the lit face loses near a crease where the blur is stopped there
+ * (kappa 0: the calibration's blur is not stopped; the gain above was
+ * fitted over the blur's own share). */
+void sss__crease_loss_params(int32_t calibration, float albedo, float *kappa,
+                             float *gamma);
 /* Adds nothing where no pixel of an enabled kernel (per kernel: enabled,
  * and its material's calibration) has a crease: fills extra (3 floats a
  * pixel, packed, the signal's units) with the light that crosses one,
@@ -214,7 +227,7 @@ void sss__crease_params(int32_t calibration, float albedo, float *kappa,
 sss_result sss__crease(const sss__job *job, int32_t kernel_count,
                        const sss_image *diff_col, const uint8_t *enabled,
                        const int32_t *calibration, int32_t num_threads,
-                       float *extra);
+                       float *extra, uint8_t *breaks, int term);
 /* What the walk returns over the whole visible side of an object whose
  * median x (mean curvature x radius) is x, over the flat slab's; *weight
  * (0 up to x = 10, 1 from 30) is how much of it stands in place of the

@@ -49,8 +49,9 @@ X("max_support_px", max_support_px, INT, 256, 1, INT32_MAX, 0, \
   "pixels: the most a kernel's half-width may be") \
 X("samples", samples, INT, 64, 1, 4096, 0, \
   "disk method: most samples per pixel") \
-X("crease", crease, INT, 1, 0, 1, 0, \
-  "1: calibrated materials carry light over sharp convex edges")
+X("crease", crease, INT, 1, 0, 2, 0, \
+  "1: calibrated materials carry light over sharp convex edges; 2: the " \
+  "blur stops at them but carries nothing over (for measuring the term)")
 /* clang-format on */
 
 #endif

@@ -479,11 +479,20 @@ typedef struct anchor {
 	float acc[3], ws[3];
 } anchor;
 
+/* A plane's slot holds the kernel in its low 16 bits and, above, which
+ * face of the row (between creases, sss__job.breaks) the pixel is on:
+ * samples count only on the centre's kernel and face. */
+#define FACE_SHIFT 16
+static int32_t kernel_of(int32_t slot)
+{
+	return slot & ((1 << FACE_SHIFT) - 1);
+}
+
 /* The kind of blur pixel i of the row needs, with its half-width. */
 static int pixel_kind(const pass_ctx *ctx, const sss__blur1d *row,
                       int32_t i, double *r, int *capped)
 {
-	int32_t slot = row->slot[i];
+	int32_t slot = kernel_of(row->slot[i]);
 	const table *t = &ctx->tables[slot];
 	*r = half_width(ctx->job, &ctx->job->kernels[slot], &ctx->ax,
 	                ctx->in.len, row->z[i], capped);
@@ -504,13 +513,13 @@ static const sss__taps *pixel_setup(const pass_ctx *ctx,
 	const sss__job *job = ctx->job;
 	const plane *pl = &ctx->in;
 	const axis *ax = &ctx->ax;
-	int32_t slot = row->slot[i];
+	int32_t slot = kernel_of(row->slot[i]);
 	const sss__kernel *k = &job->kernels[slot];
 	const table *t = &ctx->tables[slot];
 	float zc = row->z[i];
 	*b = *row;
 	b->i = i;
-	b->slot_c = (int16_t)slot;
+	b->slot_c = row->slot[i];
 	b->r = (float)r;
 	b->zc = zc;
 	b->cut_q = t->cut_q;
@@ -658,7 +667,7 @@ static int blur_pixel(const pass_ctx *ctx, const sss__blur1d *row,
 			ws[c] = b.wsum[c] + t->centre[c];
 		}
 		const anchor *lo = &anc[0], *hi = &anc[1];
-		double support = ctx->job->kernels[b.slot_c].support;
+		double support = ctx->job->kernels[kernel_of(b.slot_c)].support;
 		float u = (float)d / STRIDE;
 		int between = d != 0 && lo->ok && hi->ok && lo->slot == b.slot_c &&
 		              hi->slot == b.slot_c && lo->capped == capped &&
@@ -745,6 +754,37 @@ static void fill_rows(void *vctx, int32_t y0, int32_t y1)
 	}
 }
 
+/* Each plane's slots marked with the face of its row they lie on: the
+ * count of creases crossed from the row's start (rows: SSS__BREAK_RIGHT,
+ * columns: SSS__BREAK_DOWN). Planes so marked are not kept for a
+ * re-tune (the breaks follow the materials' settings too). */
+static void faces(const sss__job *job, const plane *hp, const plane *vp)
+{
+	int32_t w = job->width, h = job->height;
+	for (int32_t y = 0; y < h; y++) {
+		int32_t face = 0;
+		for (int32_t x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			if (x > 0 && (job->breaks[i - 1] & SSS__BREAK_RIGHT) &&
+			    face < 0x7fff)
+				face++;
+			if (hp->slot[i] >= 0)
+				hp->slot[i] |= face << FACE_SHIFT;
+		}
+	}
+	for (int32_t x = 0; x < w; x++) {
+		int32_t face = 0;
+		for (int32_t y = 0; y < h; y++) {
+			size_t o = (size_t)x * h + y;
+			if (y > 0 && (job->breaks[(size_t)(y - 1) * w + x] &
+			              SSS__BREAK_DOWN) && face < 0x7fff)
+				face++;
+			if (vp->slot[o] >= 0)
+				vp->slot[o] |= face << FACE_SHIFT;
+		}
+	}
+}
+
 /* One pass over rows r0..r1 of ctx->in, in blocks of BLOCK rows. The pixel
  * at position p of row r sits at p * rows + r in the other orientation:
  * the first pass stores its result there (the transposed plane), the
@@ -801,7 +841,7 @@ static void pass_rows(void *vctx, int32_t r0, int32_t r1)
 					float v[3];
 					for (int c = 0; c < 3; c++)
 						v[c] = ctx->out.rgb[c][o];
-					sss__blend_pixel(&job->kernels[slot], b, v);
+					sss__blend_pixel(&job->kernels[kernel_of(slot)], b, v);
 					for (int c = 0; c < 3; c++)
 						ctx->out.rgb[c][o] = v[c];
 				}
@@ -925,7 +965,8 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	/* Depth and slots laid out both ways depend on the frame's depth and
 	 * the slot map only: a kept workspace keeps them for a re-tune that
 	 * leaves the slot map as it was (same bits). */
-	int kept = sss__ws_same_slots(job->ws, SSS__WS_PLANE_SLOT, job->slot,
+	int kept = !job->breaks &&
+	           sss__ws_same_slots(job->ws, SSS__WS_PLANE_SLOT, job->slot,
 	                              npix);
 	sss__ws_forget(job->ws, SSS__WS_PLANE_SLOT); /* noted once laid out */
 	float *hbuf = copy_z ? sss__ws_get(job->ws, SSS__WS_DEPTH_H,
@@ -972,8 +1013,10 @@ sss_result sss__separable(const sss__job *job, int32_t num_threads)
 	pass_ctx first = {job, tables, hp, vp, ax[0], 1, avx2, half_max, &failed,
 	                  kept};
 	sss__parallel_rows(h, num_threads, fill_rows, &first);
-	if (job->ws && (r = sss__ws_note_slots(job->ws, SSS__WS_PLANE_SLOT,
-	                                       job->slot, npix)))
+	if (job->breaks)
+		faces(job, &hp, &vp);
+	else if (job->ws && (r = sss__ws_note_slots(job->ws, SSS__WS_PLANE_SLOT,
+	                                            job->slot, npix)))
 		goto done;
 	sss__parallel_rows(h, num_threads, pass_rows, &first);
 	pass_ctx second = {job, tables, vp, hp, ax[1], 0, avx2, half_max, &failed,

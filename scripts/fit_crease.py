@@ -13,7 +13,12 @@ d = gamma x radius; gamma from a grid, kappa by least squares, over every
 radius of the run. Printed per albedo: gamma, kappa, the fit's RMS, and
 the RMS of the walk against the library without and with the term (the
 csv's `crease` column) over the unlit face, all in units of the lit
-face's scattered light. --plot draws, for a few albedos, the profile
+face's scattered light. A run with the `stopped` column (the blur
+stopped at the edge, nothing carried over: the walks whose blur stops
+there, Random Walk (Skin) on 4.x) is fitted against it instead: the gain
+on the unlit face, and in the same way the lit face's loss (the stopped
+blur over the walk there), printed after the gain as loss gamma, kappa
+and RMS. --plot draws, for a few albedos, the profile
 across the edge: the walk, the library without and with the term.
 """
 import argparse
@@ -128,36 +133,53 @@ def main(argv):
     groups = load(args.csv)
     if args.plot:
         plot(groups, albedos, args.plot)
+    stopped = all("stopped" in r for by in groups.values()
+                  for rows in by.values() for r in rows)
     print(f"{'albedo':>6} {'gamma':>6} {'kappa':>7} {'fit':>7} "
-          f"{'without':>8} {'with':>7}")
+          f"{'without':>8} {'with':>7}" +
+          (f" {'loss g':>6} {'kappa':>7} {'fit':>7}" if stopped else ""))
     for albedo, by_radius in sorted(groups.items()):
-        data = []
+        gain, loss = [], []
         for radius, rows in by_radius.items():
             t = np.array([float(r["t"]) for r in rows])
-            excess = np.array([float(r["rw"]) - float(r["ours"])
-                               for r in rows])
+            base = np.array([float(r["stopped" if stopped else "ours"])
+                             for r in rows])
+            rw = np.array([float(r["rw"]) for r in rows])
             after = np.array([float(r["rw"]) - float(r.get("crease", "nan"))
                               for r in rows])
-            unlit = t > 0
-            data.append((radius, t[unlit], excess[unlit], after[unlit],
-                         abs(t[1] - t[0])))
-        best = None
-        for g in GAMMAS:
-            models = [row_means(t, step, g * radius)
-                      for radius, t, _, _, step in data]
-            num = sum(m @ e for m, (_, _, e, _, _) in zip(models, data))
-            den = sum(m @ m for m in models)
-            kappa = num / den
-            err = np.sqrt(sum(((kappa * m - e) ** 2).sum()
-                              for m, (_, _, e, _, _) in zip(models, data)) /
-                          sum(len(e) for _, _, e, _, _ in data))
-            if best is None or err < best[2]:
-                best = (g, kappa, err)
-        n = sum(len(e) for _, _, e, _, _ in data)
-        without = np.sqrt(sum((e ** 2).sum() for _, _, e, _, _ in data) / n)
-        with_term = np.sqrt(sum((a ** 2).sum() for _, _, _, a, _ in data) / n)
-        print(f"{albedo:6.3f} {best[0]:6.3f} {best[1]:7.3f} {best[2]:7.4f} "
-              f"{without:8.4f} {with_term:7.4f}")
+            unlit, lit = t > 0, t < 0
+            gain.append((radius, t[unlit], (rw - base)[unlit], after[unlit],
+                         np.abs(np.diff(t[unlit])).mean()))
+            loss.append((radius, -t[lit], (base - rw)[lit], after[lit],
+                         np.abs(np.diff(t[lit])).mean()))
+        best = fit(gain)
+        n = sum(len(e) for _, _, e, _, _ in gain)
+        without = np.sqrt(sum((e ** 2).sum() for _, _, e, _, _ in gain) / n)
+        with_term = np.sqrt(sum((a ** 2).sum() for _, _, _, a, _ in gain) / n)
+        line = (f"{albedo:6.3f} {best[0]:6.3f} {best[1]:7.3f} {best[2]:7.4f} "
+                f"{without:8.4f} {with_term:7.4f}")
+        if stopped:
+            lb = fit(loss)
+            line += f" {lb[0]:6.3f} {lb[1]:7.3f} {lb[2]:7.4f}"
+        print(line)
+
+
+def fit(data):
+    """(gamma, kappa, RMS) of kappa x row_means(t, step, gamma r) against
+    the excess e, over every radius's (radius, t, e, _, step)."""
+    best = None
+    for g in GAMMAS:
+        models = [row_means(t, step, g * radius)
+                  for radius, t, _, _, step in data]
+        num = sum(m @ e for m, (_, _, e, _, _) in zip(models, data))
+        den = sum(m @ m for m in models)
+        kappa = num / den
+        err = np.sqrt(sum(((kappa * m - e) ** 2).sum()
+                          for m, (_, _, e, _, _) in zip(models, data)) /
+                      sum(len(e) for _, _, e, _, _ in data))
+        if best is None or err < best[2]:
+            best = (g, kappa, err)
+    return best
 
 
 if __name__ == "__main__":

@@ -183,8 +183,8 @@ static void test_apply_arguments(void)
 	BAD_APPLY("apply-12", SSS_ERR_INVALID_ARGUMENT, opt.samples = 0,
 	          opt.samples = 64,
 	          "options: samples 0 must be 1..4096");
-	BAD_APPLY("apply-12b", SSS_ERR_INVALID_ARGUMENT, opt.crease = 2,
-	          opt.crease = 1, "options: crease 2 must be 0..1");
+	BAD_APPLY("apply-12b", SSS_ERR_INVALID_ARGUMENT, opt.crease = 3,
+	          opt.crease = 1, "options: crease 3 must be 0..2");
 	BAD_APPLY("apply-13", SSS_ERR_INVALID_ARGUMENT, opt.method = 17,
 	          opt.method = 0,
 	          "options: unknown method 17 (expected 0..4)");

@@ -390,8 +390,8 @@ static const struct {
 	{"err-max-support", "{\"max_support_px\": 0}",
 	 SSS_ERR_INVALID_ARGUMENT, "max_support_px: 0 is out of range (must be "
 	 ">= 1)"},
-	{"err-crease", "{\"crease\": 2}",
-	 SSS_ERR_INVALID_ARGUMENT, "crease: 2 is out of range (must be 0..1)"},
+	{"err-crease", "{\"crease\": 3}",
+	 SSS_ERR_INVALID_ARGUMENT, "crease: 3 is out of range (must be 0..2)"},
 	{"err-radius-scale", "{\"radius_scale\": -1}",
 	 SSS_ERR_INVALID_ARGUMENT, "radius_scale: -1 is out of range"},
 	{"err-mat-taps", "{\"materials\": [{\"pass_index\": 1, \"profile\": "
