@@ -76,6 +76,9 @@ typedef struct crease_ctx {
 	const crease_source *sources; /* by tile */
 	float *extra;                 /* 3 per pixel, packed */
 	uint8_t *breaks;              /* per pixel: SSS__BREAK_*, or NULL */
+	const uint8_t *stops;         /* per kernel: the blur stops at its
+	                                 creases (it takes the term and its
+	                                 calibration has a loss) */
 	int term;                     /* 0: the light over the edges left out */
 	int receive_known;            /* near[] holds CAN_RECEIVE */
 	double u_node[CREASE_TABLE];  /* Burley d = 1 */
@@ -333,6 +336,22 @@ static int flat_at(const crease_ctx *ctx, int16_t k, int32_t x, int32_t y,
  * more than 45 degrees from its own, each below the other's tangent plane
  * (convex), and each face flat for a pixel beyond them (a crease, not a
  * smooth bend such as a sphere's limb seen at grazing angles). */
+static int convex_pair(const crease_ctx *ctx, int16_t k, int32_t x,
+                       int32_t y, int dir, const double P[3],
+                       const double n[3], const double Q[3],
+                       const double m[3], double max_cos)
+{
+	double D[3];
+	if (!(dot3(n, m) < max_cos))
+		return 0;
+	for (int c = 0; c < 3; c++)
+		D[c] = Q[c] - P[c];
+	if (!(dot3(D, n) < 0.0 && dot3(D, m) > 0.0))
+		return 0;
+	return flat_at(ctx, k, x - step_x[dir], y - step_y[dir], n) &&
+	       flat_at(ctx, k, x + 2 * step_x[dir], y + 2 * step_y[dir], m);
+}
+
 static void detect_rows(void *vctx, int32_t y0, int32_t y1)
 {
 	crease_ctx *ctx = vctx;
@@ -356,20 +375,12 @@ static void detect_rows(void *vctx, int32_t y0, int32_t y1)
 				if (job->slot[j] != k || !(ctx->near[j] & NEAR_BENT) ||
 				    isnan(ctx->nrm[3 * j]))
 					continue;
-				double Q[3], m[3], D[3];
+				double Q[3], m[3];
 				load3(ctx->pos + 3 * j, Q);
 				load3(ctx->nrm + 3 * j, m);
-				double cs = dot3(n, m);
-				if (!(cs < best))
+				if (!convex_pair(ctx, k, x, y, dir, P, n, Q, m, best))
 					continue;
-				for (int c = 0; c < 3; c++)
-					D[c] = Q[c] - P[c];
-				if (!(dot3(D, n) < 0.0 && dot3(D, m) > 0.0))
-					continue;
-				if (!flat_at(ctx, k, x - step_x[dir], y - step_y[dir], n) ||
-				    !flat_at(ctx, k, qx + step_x[dir], qy + step_y[dir], m))
-					continue;
-				best = cs;
+				best = dot3(n, m);
 				ctx->across[i] = (int8_t)dir;
 			}
 		}
@@ -397,18 +408,12 @@ static int parted(const crease_ctx *ctx, size_t i, int32_t x, int32_t y,
 	    !(ctx->near[i] & NEAR_BENT) || !(ctx->near[j] & NEAR_BENT) ||
 	    isnan(ctx->nrm[3 * i]) || isnan(ctx->nrm[3 * j]))
 		return 0;
-	double P[3], Q[3], n[3], m[3], D[3];
+	double P[3], Q[3], n[3], m[3];
 	load3(ctx->pos + 3 * i, P);
 	load3(ctx->pos + 3 * j, Q);
 	load3(ctx->nrm + 3 * i, n);
 	load3(ctx->nrm + 3 * j, m);
-	if (!(dot3(n, m) < CREASE_MIN_COS))
-		return 0;
-	for (int c = 0; c < 3; c++)
-		D[c] = Q[c] - P[c];
-	if (!(dot3(D, n) < 0.0 && dot3(D, m) > 0.0 &&
-	      flat_at(ctx, k, x - step_x[dir], y - step_y[dir], n) &&
-	      flat_at(ctx, k, qx + step_x[dir], qy + step_y[dir], m)))
+	if (!convex_pair(ctx, k, x, y, dir, P, n, Q, m, CREASE_MIN_COS))
 		return 0;
 	const float *wr = job->kernels[k].walk_radius;
 	double widest = fmax(wr[0], fmax(wr[1], wr[2]));
@@ -426,11 +431,7 @@ static void break_rows(void *vctx, int32_t y0, int32_t y1)
 			size_t i = (size_t)y * w + x;
 			uint8_t b = 0;
 			int16_t k = job->slot[i];
-			float lk, lg;
-			if (k >= 0)
-				sss__crease_loss_params(ctx->calibration[k], 0.5f, &lk, &lg);
-			if (k >= 0 && ctx->enabled[k] && lk > 0.0f &&
-			    (ctx->near[i] & NEAR_BENT)) {
+			if (k >= 0 && ctx->stops[k] && (ctx->near[i] & NEAR_BENT)) {
 				if (parted(ctx, i, x, y, 0))
 					b |= SSS__BREAK_RIGHT;
 				if (parted(ctx, i, x, y, 2))
@@ -662,6 +663,16 @@ static void receive_rows(void *vctx, int32_t y0, int32_t y1)
 		}
 }
 
+/* The mean of F(t) - F(t + face) over t in [a, b] (extent b - a, the
+ * pixel's across the edge), F for Burley's d. */
+static double mean_tail(const crease_ctx *ctx, double d, double a, double b,
+                        double face, double extent)
+{
+	double u = 1.0 / d, f = face * u;
+	return d * (G_at(ctx, b * u) - G_at(ctx, a * u) - G_at(ctx, b * u + f) +
+	            G_at(ctx, a * u + f)) / extent;
+}
+
 static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 {
 	const crease_ctx *ctx = vctx;
@@ -756,26 +767,15 @@ static void crease_rows(void *vctx, int32_t y0, int32_t y1)
 			double a = fmax(tm - 0.5 * extent, 0.0), b = tm + 0.5 * extent;
 			for (int c = 0; c < 3; c++) {
 				double v = 0.0;
-				if (kappa[c] > 0.0 && d[c] > 0.0) {
-					/* from sources at [0, face] from the edge: F(t) -
-					 * F(t + face) */
-					double u = 1.0 / d[c], f = face * u;
-					double mean_F = d[c] * (G_at(ctx, b * u) -
-					                        G_at(ctx, a * u) -
-					                        G_at(ctx, b * u + f) +
-					                        G_at(ctx, a * u + f)) / extent;
-					v += kappa[c] * mean_F * WL[c] / W;
-				}
-				if (lkappa[c] > 0.0 && ld[c] > 0.0) {
-					/* its own light that leaves through the other face,
-					 * [0, face] wide */
-					double u = 1.0 / ld[c], f = face * u;
-					double mean_F = ld[c] * (G_at(ctx, b * u) -
-					                         G_at(ctx, a * u) -
-					                         G_at(ctx, b * u + f) +
-					                         G_at(ctx, a * u + f)) / extent;
-					v -= lkappa[c] * mean_F * signal_at(job, i, c);
-				}
+				/* from sources at [0, face] from the edge */
+				if (kappa[c] > 0.0 && d[c] > 0.0)
+					v += kappa[c] * mean_tail(ctx, d[c], a, b, face, extent) *
+					     WL[c] / W;
+				/* its own light that leaves through the other face */
+				if (lkappa[c] > 0.0 && ld[c] > 0.0)
+					v -= lkappa[c] *
+					     mean_tail(ctx, ld[c], a, b, face, extent) *
+					     signal_at(job, i, c);
 				out[c] = (float)v;
 			}
 		}
@@ -852,7 +852,11 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 {
 	size_t npix = (size_t)job->width * job->height;
 	double *reach = malloc((kernel_count ? kernel_count : 1) * sizeof *reach);
-	for (int32_t k = 0; reach && k < kernel_count; k++) {
+	uint8_t *stops = malloc(kernel_count ? kernel_count : 1);
+	for (int32_t k = 0; reach && stops && k < kernel_count; k++) {
+		float lk, lg;
+		sss__crease_loss_params(calibration[k], 0.5f, &lk, &lg);
+		stops[k] = enabled[k] && lk > 0.0f;
 		/* the table's widest gamma, albedo by albedo */
 		float widest = 0.0f, kappa, gamma;
 		for (int a = 0; a <= 100; a++) {
@@ -884,14 +888,15 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 	uint8_t *near = sss__ws_get(job->ws, SSS__WS_EDGE_NEAR, npix, 0);
 	int32_t *first = NULL, *sat = NULL;
 	crease_source *sources = NULL;
-	sss_result r = ctx && pos && nrm && across && near && reach
+	sss_result r = ctx && pos && nrm && across && near && reach && stops
 	               ? SSS_OK : SSS_ERR_OUT_OF_MEMORY;
 	if (!r) {
 		*ctx = (crease_ctx){.job = job, .diff_col = diff_col,
 		                    .enabled = enabled, .calibration = calibration,
 		                    .reach = reach, .pos = pos, .nrm = nrm,
 		                    .near = near, .across = across, .extra = extra,
-		                    .breaks = breaks, .term = term};
+		                    .breaks = breaks, .stops = stops,
+		                    .term = term};
 		tabulate(ctx);
 		memset(extra, 0, npix * 3 * sizeof *extra);
 		if (!kept) {
@@ -939,6 +944,7 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 	free(sat);
 	free(sources);
 	free(reach);
+	free(stops);
 	sss__ws_put(job->ws, near);
 	sss__ws_put(job->ws, across);
 	sss__ws_put(job->ws, pos);
