@@ -560,10 +560,11 @@ typedef struct sss_options {
 	                            carries light over sharp convex edges
 	                            onto the next face, as the walk does;
 	                            0: not (what its measurement compares);
-	                            2: the separable blur stops at them, as
-	                            with 1, but nothing is carried over
-	                            (what the lit face's loss is fitted
-	                            against) */
+	                            2: the separable blur stops at them
+	                            (with 1 only where the calibration has
+	                            a measured loss) and nothing is
+	                            carried over (what the gain and the lit
+	                            face's loss are fitted against) */
 } sss_options;
 
 /* sss_options_default's taps, and what a material's taps 0 means. */

@@ -672,10 +672,10 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
  *    Random Walk (Skin), at 2 and 6 cm they agree within 8 % above
  *    A = 0.5 with gamma 0.15 - 0.16: the profile follows the radius. Its
  *    plain Random Walk (SSS_CALIBRATION_CYCLES4_RANDOM_WALK) keeps the
- *    light much closer to the edge below A = 0.8 (gamma 0.03 - 0.12,
- *    under a pixel at 3 cm): those rows were measured at r = 12 cm with
- *    a camera 0.1 m wide (kappa gamma within 10 % of the 3 cm run's).
- *    Blender 3.4.1's Random Walk for SSS_CALIBRATION_CYCLES_RANDOM_WALK.
+ *    light much closer to the edge below A = 0.8 (gamma 0.03 - 0.13):
+ *    its rows were measured with a camera 0.1 m wide at 192 x 192, so
+ *    that d spans pixels. Blender 3.4.1's Random Walk for
+ *    SSS_CALIBRATION_CYCLES_RANDOM_WALK (96 x 96 over 0.2 m).
  *    A = 0 is as 0.05. At exactly A = 1 both Random Walk (Skin) of 4.5
  *    and 3.4's Random Walk measured no excess (under 0.003 at 3 and
  *    5 cm), and plain Random Walk the row it has. kappa is interpolated
@@ -685,49 +685,61 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
  *    to 0.3 (1.55 at 0.05), is 0.003 - 0.012 with the term (0.09).
  *    The blur's own share across the edge depends on the view (the
  *    unlit face seen head-on takes a fifth of what it takes at 70
- *    degrees), the walk's does not: so for Random Walk (Skin) the
- *    separable blur stops at creases (crease_loss_* below has its row)
- *    and its row here is fitted over that stopped blur (calibrate.py
+ *    degrees), the walk's does not: so the separable blur stops at
+ *    creases (for every calibration with a crease_loss_* row below) and
+ *    the rows here are fitted over that stopped blur (calibrate.py
  *    --part crease, its `stopped` column; fit_crease.py), the whole of
- *    what crosses. The other rows were fitted over the blur at 45
- *    degrees, their blur still crossing. */
+ *    what crosses, at r = 3 cm and 45 degrees. Checked at 4 cm from 20,
+ *    45 and 70 degrees (docs/calibration.md): within 5 cm of the edge
+ *    the RMS against each walk fell 2 - 6 times from the rows fitted
+ *    over the crossing blur. */
 static const float crease_kappa[][CAL_N] = {
 	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
-		19.92f, 19.92f, 9.975f, 5.033f, 3.241f, 2.327f, 1.740f, 1.317f,
-		0.981f, 0.663f, 0.444f, 0.317f, 0.322f, 0.308f, 0.308f, 0.0f},
+		21.074f, 21.074f, 11.102f, 6.042f, 4.288f, 3.377f, 2.785f, 2.367f,
+		2.002f, 1.635f, 1.438f, 1.168f, 1.173f, 1.158f, 1.157f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
 		11.897f, 11.897f, 6.690f, 4.010f, 3.088f, 2.558f, 2.195f, 1.897f,
 		1.644f, 1.426f, 1.204f, 1.037f, 1.004f, 1.018f, 1.018f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		0.676f, 0.676f, 0.657f, 0.544f, 0.512f, 0.436f, 0.385f, 0.341f,
-		0.280f, 0.155f, 0.104f, 0.082f, 0.074f, 0.074f, 0.074f, 0.074f},
+		1.568f, 1.568f, 1.628f, 1.607f, 1.510f, 1.516f, 1.401f, 1.326f,
+		1.246f, 1.149f, 1.062f, 1.026f, 1.006f, 1.006f, 1.006f, 1.006f},
 };
 static const float crease_gamma[][CAL_N] = {
 	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
-		0.41f, 0.41f, 0.37f, 0.30f, 0.25f, 0.21f, 0.18f, 0.15f,
-		0.14f, 0.13f, 0.13f, 0.11f, 0.12f, 0.12f, 0.12f, 0.12f},
+		0.41f, 0.41f, 0.37f, 0.31f, 0.26f, 0.22f, 0.19f, 0.16f,
+		0.14f, 0.11f, 0.085f, 0.065f, 0.065f, 0.065f, 0.065f, 0.065f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
 		0.41f, 0.41f, 0.37f, 0.31f, 0.26f, 0.22f, 0.19f, 0.17f,
 		0.15f, 0.11f, 0.095f, 0.065f, 0.07f, 0.07f, 0.07f, 0.07f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		0.03f, 0.03f, 0.03f, 0.035f, 0.04f, 0.05f, 0.06f, 0.08f,
-		0.12f, 0.25f, 0.50f, 0.70f, 0.80f, 0.80f, 0.80f, 0.80f},
+		0.03f, 0.03f, 0.03f, 0.035f, 0.045f, 0.05f, 0.065f, 0.08f,
+		0.10f, 0.13f, 0.16f, 0.18f, 0.19f, 0.19f, 0.19f, 0.19f},
 };
 #define CREASE_ROWS ((int32_t)(sizeof crease_kappa / sizeof *crease_kappa))
 /* With the blur stopped at creases (the calibrations that have these
  * rows): what the lit face loses near the edge, kappa F(t) of its own
  * light, fitted like the gain on the lit face's profile. */
 static const float crease_loss_kappa[][CAL_N] = {
+	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
+		1.539f, 1.539f, 1.480f, 1.465f, 1.521f, 1.532f, 1.515f, 1.435f,
+		1.410f, 1.292f, 1.108f, 0.940f, 1.000f, 0.997f, 0.998f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
 		4.499f, 4.499f, 2.603f, 1.677f, 1.403f, 1.254f, 1.136f, 1.091f,
 		1.063f, 0.936f, 0.877f, 0.756f, 0.779f, 0.728f, 0.728f, 0.0f},
-	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {0},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
+		0.167f, 0.167f, 0.195f, 0.260f, 0.362f, 0.464f, 0.569f, 0.682f,
+		0.780f, 0.803f, 0.812f, 0.807f, 0.813f, 0.813f, 0.813f, 0.814f},
 };
 static const float crease_loss_gamma[][CAL_N] = {
+	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
+		0.31f, 0.31f, 0.29f, 0.25f, 0.21f, 0.18f, 0.16f, 0.16f,
+		0.13f, 0.10f, 0.085f, 0.055f, 0.05f, 0.055f, 0.055f, 0.055f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN] = {
 		0.34f, 0.34f, 0.35f, 0.34f, 0.31f, 0.27f, 0.24f, 0.21f,
 		0.17f, 0.12f, 0.11f, 0.07f, 0.07f, 0.08f, 0.08f, 0.08f},
-	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {0},
+	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
+		0.26f, 0.26f, 0.24f, 0.21f, 0.16f, 0.14f, 0.13f, 0.12f,
+		0.12f, 0.14f, 0.15f, 0.16f, 0.16f, 0.16f, 0.16f, 0.16f},
 };
 
 static void crease_row(const float (*kt)[CAL_N], const float (*gt)[CAL_N],

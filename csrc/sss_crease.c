@@ -30,7 +30,7 @@
  * whatever the pixel size.
  *
  * For the calibrations whose lit face has a measured loss
- * (sss__crease_loss_params: Random Walk (Skin)), the separable blur
+ * (sss__crease_loss_params: every walk's), the separable blur
  * stops at each crease (breaks: the pixel pairs it parts) and each pixel
  * also loses the loss's kappa F(t) of its own light, F with the loss's
  * d: the light that leaves through the other face. Then the result is
@@ -856,7 +856,9 @@ sss_result sss__crease(const sss__job *job, int32_t kernel_count,
 	for (int32_t k = 0; reach && stops && k < kernel_count; k++) {
 		float lk, lg;
 		sss__crease_loss_params(calibration[k], 0.5f, &lk, &lg);
-		stops[k] = enabled[k] && lk > 0.0f;
+		/* 2 (no term) stops it for every walk: what a loss row is
+		 * fitted against before it exists */
+		stops[k] = enabled[k] && (lk > 0.0f || !term);
 		/* the table's widest gamma, albedo by albedo */
 		float widest = 0.0f, kappa, gamma;
 		for (int a = 0; a <= 100; a++) {

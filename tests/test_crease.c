@@ -1,10 +1,13 @@
 /* test_crease.c - the light a sharp convex edge carries onto the next face
  * (sss_crease.c): on a 90-degree edge seen at 45 degrees, lit on one face
- * only, the unlit face gains in all kappa x the integral of F (0.7958 d
- * for Burley's marginal) times the lit face's light, whatever the pixel
- * size, orthographic or in perspective, and the lit face nothing; nothing on a plane, a sphere, without a
- * calibration or with the option off; it vanishes with the radius, and on
- * a face narrower than the radius only the light of that face crosses. */
+ * only, for 4.x's Random Walk (Skin) and Random Walk and 3.x's Random
+ * Walk, the unlit face gains in all kappa x the integral of F (0.7958 d
+ * for Burley's marginal) times the lit face's light at the edge, and the
+ * lit face loses the loss's kappa x 0.7958 d of it, whatever the pixel
+ * size, orthographic or in perspective; nothing on a plane, a sphere,
+ * without a calibration or with the option off; it vanishes with the
+ * radius, and on a face narrower than the radius only the light of that
+ * face crosses. */
 #include "sss_internal.h"
 #include "test_util.h"
 
@@ -97,13 +100,13 @@ static void frame_free(frame *f)
 	free(f->pt);
 }
 
-/* Burley matched to 4.x's Random Walk (Skin), radius r m. */
-static sss_material skin_walk(float r, float albedo)
+/* Burley matched to one of 4.x's walks, radius r m. */
+static sss_material walk(int32_t calibration, float r, float albedo)
 {
 	sss_material m;
 	sss_material_default(&m, SSS_PROFILE_BURLEY);
 	m.pass_index = 1;
-	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
+	m.calibration = calibration;
 	m.burley_mapping = SSS_BURLEY_CYCLES_RANDOM_WALK;
 	for (int c = 0; c < 3; c++) {
 		m.albedo[c] = albedo;
@@ -150,16 +153,35 @@ static void crease_sums(const frame *f, const float *with,
 	*plateau = with[3 * ((n - 3) * n + x)];
 }
 
-static void test_wedge(int perspective)
+/* The walks at 3 cm, but 4.x's plain Random Walk, whose light stays much
+ * closer to the edge (d = 0.03 - 0.19 of the radius), at 7 cm and 128
+ * pixels or more so that its d spans a pixel and its tail the face. */
+/* The calibration's gain for the view angle at row y of the lit (lower)
+ * face, whose normal is (0, -1, -1) / sqrt 2, in the frame's middle
+ * column; the camera at the origin looking along +z. */
+static double view_gain(const frame *f, const sss_material *m, int y)
+{
+	const double *p = f->pt + 3 * (y * f->n + f->n / 2);
+	double len = f->cam.type == SSS_CAMERA_PERSPECTIVE
+	             ? sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) : 1.0;
+	double cosv = f->cam.type == SSS_CAMERA_PERSPECTIVE
+	              ? (p[1] + p[2]) / sqrt(2.0) / len : sqrt(0.5);
+	float g[3];
+	sss_calibration_gain(m->calibration, m->albedo, (float)cosv, g);
+	return g[0];
+}
+
+static void test_wedge(int32_t calibration, float radius, int small,
+                       int perspective)
 {
 	const float albedos[] = {0.3f, 0.55f, 0.85f};
-	const int sizes[] = {64, 192};
+	const int sizes[] = {small, 192};
 	for (int a = 0; a < 3; a++) {
 		double per_d[2];
 		for (int s = 0; s < 2; s++) {
 			frame f;
 			frame_make(&f, sizes[s], WEDGE, albedos[a], 1.0, perspective);
-			sss_material m = skin_walk(0.03f, albedos[a]);
+			sss_material m = walk(calibration, radius, albedos[a]);
 			float *without = malloc(sizeof(float) * 3 * f.n * f.n);
 			CHECK_STATUS("wedge-status", SSS_OK, run(&f, &m, 1, f.out));
 			CHECK_STATUS("wedge-off-status", SSS_OK,
@@ -170,25 +192,31 @@ static void test_wedge(int perspective)
 			sss__crease_params(m.calibration, albedos[a], &kappa, &gamma);
 			sss__crease_loss_params(m.calibration, albedos[a], &lkappa,
 			                        &lgamma);
-			/* the integral of F over t is 0.7958 d */
-			double want = kappa * 0.7958 * gamma * 0.03 * plateau;
-			double lost = lkappa * 0.7958 * lgamma * 0.03 * plateau;
+			/* the integral of F over t is 0.7958 d, of the light at the
+			 * edge: in perspective the lit face is seen there at another
+			 * angle than at the far row, and the walk's energy follows
+			 * the view (plain Random Walk's by 8 % here) */
+			double at_edge = plateau * view_gain(&f, &m, f.n / 2 + 2) /
+			                 view_gain(&f, &m, f.n - 3);
+			double want = kappa * 0.7958 * gamma * radius * at_edge;
+			double lost = lkappa * 0.7958 * lgamma * radius * at_edge;
 			per_d[s] = up / want;
 			CHECK("wedge-total", fabs(up / want - 1.0) < 0.05,
-			      "albedo %g, %d px, perspective %d: the unlit face gained "
-			      "%g, expected %g", (double)albedos[a], f.n, perspective,
-			      up, want);
+			      "calibration %d, albedo %g, %d px, perspective %d: the "
+			      "unlit face gained %g, expected %g", (int)calibration,
+			      (double)albedos[a], f.n, perspective, up, want);
 			CHECK("wedge-lit-face", lost > 0.0 &&
 			      fabs(low / lost - 1.0) < 0.1,
-			      "albedo %g, %d px, perspective %d: the lit face lost %g, "
-			      "expected %g", (double)albedos[a], f.n, perspective, low,
-			      lost);
+			      "calibration %d, albedo %g, %d px, perspective %d: the "
+			      "lit face lost %g, expected %g", (int)calibration,
+			      (double)albedos[a], f.n, perspective, low, lost);
 			free(without);
 			frame_free(&f);
 		}
 		CHECK("wedge-pixel-size", fabs(per_d[0] / per_d[1] - 1.0) < 0.05,
-		      "albedo %g: %g at 64 px, %g at 192 px", (double)albedos[a],
-		      per_d[0], per_d[1]);
+		      "calibration %d, albedo %g: %g at %d px, %g at 192 px",
+		      (int)calibration, (double)albedos[a], per_d[0], small,
+		      per_d[1]);
 	}
 }
 
@@ -200,7 +228,7 @@ static void test_none(void)
 	for (int s = 0; s < 2; s++) {
 		frame f;
 		frame_make(&f, 96, shapes[s], 0.6f, 1.0, 0);
-		sss_material m = skin_walk(0.03f, 0.6f);
+		sss_material m = walk(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 0.03f, 0.6f);
 		float *without = malloc(sizeof(float) * 3 * 96 * 96);
 		CHECK_STATUS("none-status", SSS_OK, run(&f, &m, 1, f.out));
 		CHECK_STATUS("none-off-status", SSS_OK, run(&f, &m, 0, without));
@@ -213,7 +241,7 @@ static void test_none(void)
 	frame f;
 	frame_make(&f, 96, WEDGE, 0.6f, 1.0, 0);
 	float *without = malloc(sizeof(float) * 3 * 96 * 96);
-	sss_material m = skin_walk(0.03f, 0.6f);
+	sss_material m = walk(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 0.03f, 0.6f);
 	m.calibration = SSS_CALIBRATION_NONE;
 	CHECK_STATUS("none-cal-status", SSS_OK, run(&f, &m, 1, f.out));
 	CHECK_STATUS("none-cal-off-status", SSS_OK, run(&f, &m, 0, without));
@@ -224,7 +252,7 @@ static void test_none(void)
 	double last = INFINITY;
 	int falls = 1;
 	for (float r = 0.01f; r > 1e-7f; r *= 0.1f) {
-		m = skin_walk(r, 0.6f);
+		m = walk(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, r, 0.6f);
 		run(&f, &m, 1, f.out);
 		run(&f, &m, 2, without);
 		double up, low, plateau;
@@ -246,7 +274,7 @@ static void test_narrow(void)
 	frame f;
 	frame_make(&f, 96, WEDGE, 0.6f, 0.012, 0);
 	float *without = malloc(sizeof(float) * 3 * 96 * 96);
-	sss_material m = skin_walk(1.0f, 0.6f);
+	sss_material m = walk(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.0f, 0.6f);
 	CHECK_STATUS("narrow-status", SSS_OK, run(&f, &m, 1, f.out));
 	CHECK_STATUS("narrow-off-status", SSS_OK, run(&f, &m, 2, without));
 	double up, low, plateau;
@@ -287,7 +315,7 @@ static void test_kept_geometry(void)
 	if (idx)
 		memcpy(idx, f.idx, sizeof(float) * f.n * f.n);
 	for (int k = 0; ws && want && off && idx && k < 7; k++) {
-		sss_material m = skin_walk(steps[k].radius, 0.6f);
+		sss_material m = walk(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, steps[k].radius, 0.6f);
 		m.pass_index = steps[k].index;
 		f.cam.ortho_scale = steps[k].view;
 		for (int i = 0; i < f.n * f.n; i++)
@@ -317,8 +345,11 @@ static void test_kept_geometry(void)
 int main(void)
 {
 	test_kept_geometry();
-	test_wedge(0);
-	test_wedge(1);
+	for (int p = 0; p < 2; p++) {
+		test_wedge(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 0.03f, 64, p);
+		test_wedge(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 0.07f, 128, p);
+		test_wedge(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 0.03f, 64, p);
+	}
 	test_none();
 	test_narrow();
 	return tu_finish("test_crease");
