@@ -11,9 +11,11 @@ energy: a large thick box (2 x 2 m face, 1 m deep) faces an orthographic
   world (strength 1, no lamps; --light sun: a sun at normal incidence
   instead). Per render three albedos (one per colour channel: Base Color =
   Subsurface Color = (a, b, c), Subsurface 1, Subsurface Radius (r, r, r),
-  Specular 0) are rendered with the random walk and with Subsurface 0 (the
-  add-on's SSS-off render). The mean Combined over the central half of the
-  frame of one divided by the other is the energy ratio RW / diffuse of
+  Specular 0, or --specular) are rendered with the random walk and with
+  Subsurface 0 (the add-on's SSS-off render). The mean Combined over the
+  central half of the frame of one divided by the other is the energy
+  ratio RW / diffuse (ratio_diffuse: the same of the diffuse passes, which
+  differs from it only with a specular layer) of
   that albedo; the diffuse side is A exactly under the white world (a
   check). --view-angles turns the box about its vertical axis so that the
   camera sees the face at those angles from its normal (the random walk's
@@ -85,6 +87,7 @@ from script_cli import run_main, script_argv  # noqa: E402
 ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
                (0.85, 0.9, 0.95), (0.98, 0.99, 1.0))
 VIEW = 0.2   # metres of slab face the camera sees
+SPECULAR = 0.0   # the measured material's specular input (--specular)
 SHAPE_RADIUS = 0.04   # the shape part's sphere, metres
 SHAPE_X = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
 
@@ -119,6 +122,11 @@ def parse_args():
                    help="crease: degrees between the camera's axis and the "
                    "unlit top face's normal")
     p.add_argument("--albedos", help="override: a,b,c;d,e,f")
+    p.add_argument("--specular", type=float, default=compat.SPECULAR_OFF,
+                   help="the Principled BSDF's Specular IOR Level (3.x: "
+                   "Specular); by default none. From 4.0 plain Random "
+                   "Walk enters through an interface of the index it "
+                   "makes (at 0.5 the IOR, 1.5)")
     p.add_argument("--shape-x", default=",".join(f"{x:g}" for x in SHAPE_X),
                    help="shape: the radii over the sphere's radius")
     args = p.parse_args(argv)
@@ -134,9 +142,12 @@ def parse_args():
     if not 5.0 <= args.crease_view <= 85.0:
         p.error(f"--crease-view {args.crease_view}: from 5 to 85 degrees "
                 "(both faces seen)")
+    if not 0.0 <= args.specular <= 1.0:
+        p.error(f"--specular {args.specular:g}: from 0 to 1")
     args.out = os.path.abspath(args.out)
-    global VIEW
+    global VIEW, SPECULAR
     VIEW = args.view
+    SPECULAR = args.specular
     return args
 
 
@@ -158,13 +169,12 @@ def reset():
 
 
 def measured_material(name):
-    """A Principled BSDF with no specular and roughness 0.5, pass index 1:
-    what every part measures."""
+    """A Principled BSDF with the specular of --specular (by default none)
+    and roughness 0.5, pass index 1: what every part measures."""
     mat = bpy.data.materials.new(name)
     mat.pass_index = 1
     bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
-    compat.principled_input(bsdf, "specular").default_value = \
-        compat.SPECULAR_OFF
+    compat.principled_input(bsdf, "specular").default_value = SPECULAR
     compat.principled_input(bsdf, "roughness").default_value = 0.5
     return mat
 
@@ -325,8 +335,14 @@ def part_energy(args):
             se = ratio * math.hypot(rw.std() / rw.mean(),
                                     off.std() / max(off.mean(), 1e-9)) \
                 / math.sqrt(rw.size)
+            # With a specular layer Combined holds its reflection too;
+            # the diffuse passes (where Cycles puts the walk's light) are
+            # what the library scales.
+            ratio_diffuse = out["rw"][1][:, c].mean() / max(
+                out["off"][1][:, c].mean(), 1e-9)
             row = dict(method=args.method, light=args.light,
-                       sun_angle=args.sun_angle,
+                       sun_angle=args.sun_angle, specular=args.specular,
+                       ratio_diffuse=float(ratio_diffuse),
                        view_angle=view_angle, radius=radius, albedo=albedo[c],
                        off=float(off.mean()), rw=float(rw.mean()),
                        ratio=float(ratio), stderr=float(se),

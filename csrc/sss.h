@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 13
+#define SSS_ABI_VERSION 14
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -364,6 +364,14 @@ typedef struct sss_material {
 	 * The gain is 1 + strength (g - 1), so strength 0 stays the
 	 * identity. */
 	int32_t calibration;
+	float walk_ior;                  /* 1..3.8 (1.5): the index of the
+	                                    surface the walk enters through;
+	                                    4.x's plain Random Walk
+	                                    (SSS_CALIBRATION_CYCLES4_RANDOM_WALK)
+	                                    takes it from the Principled
+	                                    BSDF's IOR and Specular IOR Level
+	                                    (1.5 by default, 1 at Level 0),
+	                                    and its energy follows it */
 } sss_material;
 
 /* Sets struct_size, kind and that kind's defaults (d'Eon skin for
@@ -509,11 +517,12 @@ SSS_API sss_result sss_transmission_table(const sss_material *mat,
 /* The energy gain of a calibration for a diffuse colour (albedo, clamped
  * to [0, 1]; a non-finite channel gets 1) seen at view_cosine, |cos| of
  * the angle between the surface's normal and the ray to the camera (1:
- * head-on; measured to 85 degrees, held beyond): the measured reflectance
- * of the calibrated renderer over the plain diffuse lobe's, on a flat
- * surface (sss_apply also follows the surface's curvature). NONE gives
- * 1. */
-SSS_API sss_result sss_calibration_gain(int32_t calibration,
+ * head-on; measured to 85 degrees, held beyond), through a surface of
+ * index walk_ior (sss_material.walk_ior, 1..3.8; only plain Random Walk
+ * depends on it): the measured reflectance of the calibrated renderer
+ * over the plain diffuse lobe's, on a flat surface (sss_apply also
+ * follows the surface's curvature). NONE gives 1. */
+SSS_API sss_result sss_calibration_gain(int32_t calibration, float walk_ior,
                                         const float albedo[3],
                                         float view_cosine, float gain[3]);
 

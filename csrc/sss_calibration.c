@@ -240,6 +240,67 @@ static const float cal_gain[][VIEW_N][CAL_N] = {
 	},
 };
 
+/* 4.x's plain Random Walk enters through the material's own surface, of
+ * index eta (Cycles: from the Principled BSDF's IOR and Specular IOR
+ * Level; bssrdf->ior), and its gain at an angle follows eta: the table
+ * above is eta = 1.01 (Specular IOR Level 0, what every other part of
+ * the calibration measured), these are 1.5 (Level 0.5 with IOR 1.5,
+ * Principled's defaults) and 1.79 (Level 1), measured the same way
+ * (calibrate.py --part energy --specular 0.5 / 1, white world, r = 5 cm,
+ * 48 x 48, 128 samples, the diffuse passes' ratio: standard errors
+ * under 0.0023). At 70 degrees and A = 0.05 the gain is 1.27 at eta
+ * 1.01, 0.97 at 1.5 and 0.94 at 1.79; head-on it moves by 2 %. */
+static const float rw4_eta[] = {1.01f, 1.5f, 1.7887f};
+#define RW4_ETA_N ((int)(sizeof rw4_eta / sizeof *rw4_eta))
+static const float rw4_gain[RW4_ETA_N - 1][VIEW_N][CAL_N] = {
+	{ /* eta 1.5 */
+			/* 0 degrees */
+			{0.7761f, 0.7761f, 0.7888f, 0.8139f, 0.8366f, 0.8609f, 0.8851f, 0.9080f,
+			 0.9338f, 0.9624f, 0.9743f, 0.9787f, 0.9440f, 0.9152f, 0.9060f, 0.8970f},
+			/* 30 degrees */
+			{0.8086f, 0.8086f, 0.8202f, 0.8430f, 0.8640f, 0.8856f, 0.9067f, 0.9261f,
+			 0.9483f, 0.9729f, 0.9825f, 0.9843f, 0.9488f, 0.9198f, 0.9106f, 0.9015f},
+			/* 45 degrees */
+			{0.8499f, 0.8499f, 0.8605f, 0.8803f, 0.8976f, 0.9154f, 0.9322f, 0.9466f,
+			 0.9639f, 0.9833f, 0.9905f, 0.9901f, 0.9537f, 0.9246f, 0.9153f, 0.9062f},
+			/* 60 degrees */
+			{0.9137f, 0.9137f, 0.9220f, 0.9358f, 0.9465f, 0.9577f, 0.9677f, 0.9746f,
+			 0.9852f, 0.9975f, 1.0005f, 0.9971f, 0.9596f, 0.9303f, 0.9210f, 0.9118f},
+			/* 70 degrees */
+			{0.9738f, 0.9738f, 0.9783f, 0.9854f, 0.9895f, 0.9945f, 0.9981f, 0.9995f,
+			 1.0034f, 1.0093f, 1.0089f, 1.0029f, 0.9644f, 0.9350f, 0.9256f, 0.9164f},
+			/* 80 degrees */
+			{1.0716f, 1.0716f, 1.0698f, 1.0644f, 1.0569f, 1.0508f, 1.0439f, 1.0348f,
+			 1.0290f, 1.0253f, 1.0210f, 1.0112f, 0.9714f, 0.9417f, 0.9322f, 0.9229f},
+			/* 85 degrees */
+			{1.1484f, 1.1484f, 1.1402f, 1.1231f, 1.1070f, 1.0919f, 1.0768f, 1.0611f,
+			 1.0476f, 1.0369f, 1.0293f, 1.0170f, 0.9763f, 0.9465f, 0.9370f, 0.9277f},
+	},
+	{ /* eta 1.7887 */
+			/* 0 degrees */
+			{0.7816f, 0.7816f, 0.7937f, 0.8177f, 0.8396f, 0.8635f, 0.8873f, 0.9099f,
+			 0.9353f, 0.9634f, 0.9749f, 0.9789f, 0.9441f, 0.9152f, 0.9060f, 0.8970f},
+			/* 30 degrees */
+			{0.8042f, 0.8042f, 0.8161f, 0.8392f, 0.8606f, 0.8827f, 0.9043f, 0.9239f,
+			 0.9466f, 0.9718f, 0.9817f, 0.9838f, 0.9483f, 0.9193f, 0.9101f, 0.9010f},
+			/* 45 degrees */
+			{0.8369f, 0.8369f, 0.8478f, 0.8683f, 0.8876f, 0.9062f, 0.9240f, 0.9403f,
+			 0.9590f, 0.9800f, 0.9881f, 0.9885f, 0.9524f, 0.9233f, 0.9140f, 0.9049f},
+			/* 60 degrees */
+			{0.8907f, 0.8907f, 0.8990f, 0.9140f, 0.9248f, 0.9386f, 0.9514f, 0.9616f,
+			 0.9753f, 0.9909f, 0.9955f, 0.9936f, 0.9567f, 0.9275f, 0.9182f, 0.9091f},
+			/* 70 degrees */
+			{0.9376f, 0.9376f, 0.9434f, 0.9530f, 0.9597f, 0.9688f, 0.9767f, 0.9820f,
+			 0.9902f, 1.0006f, 1.0023f, 0.9983f, 0.9606f, 0.9312f, 0.9218f, 0.9126f},
+			/* 80 degrees */
+			{1.0147f, 1.0147f, 1.0161f, 1.0166f, 1.0156f, 1.0157f, 1.0151f, 1.0115f,
+			 1.0119f, 1.0145f, 1.0125f, 1.0051f, 0.9662f, 0.9367f, 0.9273f, 0.9181f},
+			/* 85 degrees */
+			{1.0800f, 1.0800f, 1.0764f, 1.0684f, 1.0596f, 1.0519f, 1.0441f, 1.0348f,
+			 1.0286f, 1.0250f, 1.0205f, 1.0108f, 0.9711f, 0.9415f, 0.9320f, 0.9227f},
+	},
+};
+
 /* The interval [cal_albedo[i - 1], cal_albedo[i]] holding a (searched from
  * i = first; a in (cal_albedo[first - 1], 1)) and a's place t in it. */
 static int interval(float a, int first, float *t)
@@ -312,10 +373,34 @@ static int view_rows(float mu, float *tv)
 	return v;
 }
 
-sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
-                                float view_cosine, float gain[3])
+/* g(A) at view rows v, v + 1 (tv between them) through a surface of index
+ * eta: plain Random Walk's between the tables of rw4_eta, linear in eta
+ * and held beyond them; the other walks' whatever eta. */
+static float view_gain(int32_t calibration, float eta, int v, float tv,
+                       float a)
 {
-	if (!albedo || !gain)
+	const float (*t0)[CAL_N] = cal_gain[calibration], (*t1)[CAL_N] = t0;
+	float te = 0.0f;
+	if (calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK &&
+	    eta > rw4_eta[0]) {
+		int k = 1;
+		while (k < RW4_ETA_N - 1 && rw4_eta[k] < eta)
+			k++;
+		te = fminf((eta - rw4_eta[k - 1]) / (rw4_eta[k] - rw4_eta[k - 1]),
+		           1.0f);
+		t0 = k == 1 ? cal_gain[calibration] : rw4_gain[k - 2];
+		t1 = rw4_gain[k - 1];
+	}
+	float g0 = gain_at(t0[v], t0[v + 1], tv, a);
+	return te > 0.0f ? g0 + te * (gain_at(t1[v], t1[v + 1], tv, a) - g0)
+	                 : g0;
+}
+
+sss_result sss_calibration_gain(int32_t calibration, float walk_ior,
+                                const float albedo[3], float view_cosine,
+                                float gain[3])
+{
+	if (!albedo || !gain || !(walk_ior >= 1.0f && walk_ior <= 3.8f))
 		return SSS_ERR_INVALID_ARGUMENT;
 	if (calibration != SSS_CALIBRATION_NONE && !is_calibration(calibration))
 		return SSS_ERR_INVALID_ARGUMENT;
@@ -323,8 +408,7 @@ sss_result sss_calibration_gain(int32_t calibration, const float albedo[3],
 	int v = view_rows(fabsf(view_cosine), &tv);
 	for (int c = 0; c < 3; c++)
 		gain[c] = is_calibration(calibration)
-		          ? gain_at(cal_gain[calibration][v],
-		                    cal_gain[calibration][v + 1], tv, albedo[c])
+		          ? view_gain(calibration, walk_ior, v, tv, albedo[c])
 		          : 1.0f;
 	return SSS_OK;
 }
@@ -623,14 +707,13 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
 		return;
 	float s = mat->strength, tv;
 	int v = view_rows(view_cosine, &tv);
-	const float *r0 = cal_gain[mat->calibration][v];
-	const float *r1 = cal_gain[mat->calibration][v + 1];
 	for (int c = 0; c < 3; c++) {
 		float m = (mat->kind == SSS_PROFILE_JIMENEZ
 		           ? s * mat->jimenez_strength[c] : s) * fade[c];
 		if (!(m > 0.0f))
 			continue;
-		float g = gain_at(r0, r1, tv, diff_col[c]);
+		float g = view_gain(mat->calibration, mat->walk_ior, v, tv,
+		                    diff_col[c]);
 		if (shape) {
 			/* The table was measured head-on; seen at an angle the
 			 * flat gain g(A, mu) already holds the walk's excess near a

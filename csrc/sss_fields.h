@@ -153,7 +153,10 @@ X("thin_reflectance", thin_reflectance, F32, ALL, ALWAYS, 0.0f, 0, 0, 0, \
   "reflect (4.x Random Walk (Skin); needs the thickness pass)") \
 X("calibration", calibration, ENUM, ALL, ALWAYS, SSS_CALIBRATION_NONE, 0, \
   0, 0, 0, 0, SSS__NAMES(calibration), \
-  "the random walk whose energy is matched")
+  "the random walk whose energy is matched") \
+X("walk_ior", walk_ior, F32, ALL, ALWAYS, 1.5f, 0, 0, 1, 3.8, 0, \
+  SSS__NO_NAMES, "the index of the surface the walk enters through " \
+  "(4.x Random Walk: from IOR and Specular IOR Level)")
 /* clang-format on */
 
 #endif

@@ -25,6 +25,9 @@ class Found:
     # How much of the diffuse lobe scatters: Principled v2's Subsurface
     # Weight (1 for 3.x's Subsurface factor and the Subsurface node).
     weight: float = 1.0
+    # The index of the surface 4.x's plain Random Walk enters through.
+    walk_ior: float = 1.5
+
 
 @dataclass
 class Analysis:
@@ -108,7 +111,8 @@ def analyse(scene):
                 found = Found(mat, mat.name, mat.pass_index, node,
                               tuple(v * unit for v in sss.radius),
                               sss.color, compat.method(node),
-                              switch in sss.linked, sss.albedo, sss.weight)
+                              switch in sss.linked, sss.albedo, sss.weight,
+                              sss.walk_ior)
                 result.messages.extend(_principled_notes(mat, sss, switch))
             elif node.type == "SUBSURFACE_SCATTERING":
                 scale = node.inputs["Scale"].default_value
@@ -118,6 +122,10 @@ def analyse(scene):
                               tuple(node.inputs["Color"].default_value[:3]),
                               compat.method(node))
                 found.albedo = found.color
+                ior = node.inputs.get("IOR")  # 4.x: what the walk enters
+                if ior is not None:
+                    found.walk_ior = min(max(float(ior.default_value),
+                                             1.01), 3.8)
             if found:
                 result.materials.append(found)
                 break  # one profile per material

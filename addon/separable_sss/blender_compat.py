@@ -27,6 +27,7 @@ add-on's, so scripts and tests can import it on its own.
 - File Output nodes: base_path and file_slots up to 4.x; in 5.0 directory,
   file_name and file_output_items (set_file_output, file_output_inputs).
 """
+import math
 import os
 from dataclasses import dataclass
 
@@ -53,6 +54,7 @@ if PRINCIPLED_V2:
         "emission_strength": "Emission Strength",
         "transmission": "Transmission Weight",
         "specular": "Specular IOR Level",
+        "ior": "IOR",
         "roughness": "Roughness",
     }
 else:
@@ -65,6 +67,7 @@ else:
         "emission_strength": "Emission Strength",
         "transmission": "Transmission",
         "specular": "Specular",
+        "ior": "IOR",
         "roughness": "Roughness",
     }
 # The "specular" input's value that removes the specular layer: Specular 0,
@@ -129,6 +132,22 @@ class PrincipledSSS:
     linked: tuple          # names of the inputs driven by links
     ior: float = 1.4
     anisotropy: float = 0.0
+    walk_ior: float = 1.5  # the surface plain Random Walk enters through
+
+
+def walk_ior(ior, specular_level):
+    """The index plain Random Walk (4.x) enters through, as Cycles makes
+    it from the Principled BSDF's IOR and Specular IOR Level (the level
+    scales the normal-incidence reflectance F0, 0.5 keeping the IOR's), in
+    the range Cycles clamps it to."""
+    eta = ior
+    if specular_level != 0.5:
+        f0 = ((ior - 1.0) / (ior + 1.0)) ** 2 * 2.0 * specular_level
+        root = math.sqrt(min(max(f0, 0.0), 0.99))
+        eta = (1.0 + root) / (1.0 - root)
+        if ior < 1.0:
+            eta = 1.0 / eta
+    return min(max(eta, 1.01), 3.8)
 
 
 def _rgb(sock):
@@ -151,7 +170,10 @@ def principled_sss(node):
             tuple(s.name for s in socks if s.is_linked),
             float(principled_input(node, "subsurface_ior").default_value),
             float(principled_input(node, "subsurface_anisotropy")
-                  .default_value))
+                  .default_value),
+            walk_ior(float(principled_input(node, "ior").default_value),
+                     float(principled_input(node, "specular")
+                           .default_value)))
     color = principled_input(node, "subsurface_color")
     socks = (weight, radius, color, base)
     f = 1.0 if weight.is_linked else float(weight.default_value)

@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 13  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 14  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 

@@ -260,6 +260,32 @@ def test_description_follows_the_method(blends, tmp_path, method):
         assert loaded.warnings == []
 
 
+# 4.x's plain Random Walk enters through the material's own surface, whose
+# index Cycles makes from IOR and Specular IOR Level (F0 scaled by twice
+# the level, clamped to 1.01 .. 3.8); the calibration follows it.
+@pytest.mark.skipif(not compat.CYCLES_WALK_V2, reason="4.x's walk")
+@pytest.mark.parametrize("ior, level, want", [
+    (1.5, 0.5, 1.5), (1.5, 0.0, 1.01), (1.5, 1.0, 1.7887), (1.33, 0.5, 1.33),
+    (1.5, 0.25, 1.3294)])
+def test_description_takes_the_walks_surface(blends, tmp_path, ior, level,
+                                             want):
+    scene = open_scene(blends["two"], tmp_path)
+    node = bpy.data.materials["Skin"].node_tree.nodes["Principled BSDF"]
+    compat.set_method(node, "RANDOM_WALK")
+    compat.principled_input(node, "ior").default_value = ior
+    compat.principled_input(node, "specular").default_value = level
+    path = str(tmp_path / "scene.json")
+    found = pipeline.analyse(scene)
+    with pipeline.switched_off(scene, found, backlight=False):
+        pipeline.write_description(scene, found, path)
+    skin = [m for m in json.load(open(path))["materials"]
+            if m["name"] == "Skin"][0]
+    assert skin["walk_ior"] == pytest.approx(want, abs=1e-4)
+    from separable_sss import native
+    with native.Scene(path) as loaded:
+        assert loaded.warnings == []
+
+
 def test_no_scattering_material(blends, tmp_path):
     scene = open_scene(blends["none"], tmp_path)
     assert pipeline.analyse(scene).materials == []
