@@ -88,6 +88,7 @@ ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
                (0.85, 0.9, 0.95), (0.98, 0.99, 1.0))
 VIEW = 0.2   # metres of slab face the camera sees
 SPECULAR = 0.0   # the measured material's specular input (--specular)
+ROUGHNESS = 0.5  # and its roughness (--roughness)
 SHAPE_RADIUS = 0.04   # the shape part's sphere, metres
 SHAPE_X = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
 
@@ -127,6 +128,9 @@ def parse_args():
                    "Specular); by default none. From 4.0 plain Random "
                    "Walk enters through an interface of the index it "
                    "makes (at 0.5 the IOR, 1.5)")
+    p.add_argument("--roughness", type=float, default=0.5,
+                   help="the Principled BSDF's Roughness (from 4.0 it "
+                   "also shapes how plain Random Walk enters)")
     p.add_argument("--shape-x", default=",".join(f"{x:g}" for x in SHAPE_X),
                    help="shape: the radii over the sphere's radius")
     args = p.parse_args(argv)
@@ -144,10 +148,13 @@ def parse_args():
                 "(both faces seen)")
     if not 0.0 <= args.specular <= 1.0:
         p.error(f"--specular {args.specular:g}: from 0 to 1")
+    if not 0.0 <= args.roughness <= 1.0:
+        p.error(f"--roughness {args.roughness:g}: from 0 to 1")
     args.out = os.path.abspath(args.out)
-    global VIEW, SPECULAR
+    global VIEW, SPECULAR, ROUGHNESS
     VIEW = args.view
     SPECULAR = args.specular
+    ROUGHNESS = args.roughness
     return args
 
 
@@ -170,12 +177,13 @@ def reset():
 
 def measured_material(name):
     """A Principled BSDF with the specular of --specular (by default none)
-    and roughness 0.5, pass index 1: what every part measures."""
+    and the roughness of --roughness (0.5), pass index 1: what every part
+    measures."""
     mat = bpy.data.materials.new(name)
     mat.pass_index = 1
     bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
     compat.principled_input(bsdf, "specular").default_value = SPECULAR
-    compat.principled_input(bsdf, "roughness").default_value = 0.5
+    compat.principled_input(bsdf, "roughness").default_value = ROUGHNESS
     return mat
 
 
@@ -342,6 +350,7 @@ def part_energy(args):
                 out["off"][1][:, c].mean(), 1e-9)
             row = dict(method=args.method, light=args.light,
                        sun_angle=args.sun_angle, specular=args.specular,
+                       roughness=args.roughness,
                        ratio_diffuse=float(ratio_diffuse),
                        view_angle=view_angle, radius=radius, albedo=albedo[c],
                        off=float(off.mean()), rw=float(rw.mean()),

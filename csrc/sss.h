@@ -372,6 +372,10 @@ typedef struct sss_material {
 	                                    BSDF's IOR and Specular IOR Level
 	                                    (1.5 by default, 1 at Level 0),
 	                                    and its energy follows it */
+	float walk_roughness;            /* 0..1 (0.5): that surface's
+	                                    roughness (the Principled BSDF's
+	                                    Roughness), which plain Random
+	                                    Walk's energy follows too */
 } sss_material;
 
 /* Sets struct_size, kind and that kind's defaults (d'Eon skin for
@@ -514,15 +518,15 @@ SSS_API sss_result sss_transmission_table(const sss_material *mat,
                                           int32_t n, float *table,
                                           double *step, double *span);
 
-/* The energy gain of a calibration for a diffuse colour (albedo, clamped
- * to [0, 1]; a non-finite channel gets 1) seen at view_cosine, |cos| of
- * the angle between the surface's normal and the ray to the camera (1:
- * head-on; measured to 85 degrees, held beyond), through a surface of
- * index walk_ior (sss_material.walk_ior, 1..3.8; only plain Random Walk
- * depends on it): the measured reflectance of the calibrated renderer
- * over the plain diffuse lobe's, on a flat surface (sss_apply also
- * follows the surface's curvature). NONE gives 1. */
-SSS_API sss_result sss_calibration_gain(int32_t calibration, float walk_ior,
+/* The energy gain of a material's calibration (its calibration, and for
+ * plain Random Walk its walk_ior and walk_roughness) for a diffuse colour
+ * (albedo, clamped to [0, 1]; a non-finite channel gets 1) seen at
+ * view_cosine, |cos| of the angle between the surface's normal and the ray
+ * to the camera (1: head-on; measured to 85 degrees, held beyond): the
+ * measured reflectance of the calibrated renderer over the plain diffuse
+ * lobe's, on a flat surface (sss_apply also follows the surface's
+ * curvature). NONE gives 1. */
+SSS_API sss_result sss_calibration_gain(const sss_material *mat,
                                         const float albedo[3],
                                         float view_cosine, float gain[3]);
 

@@ -242,62 +242,209 @@ static const float cal_gain[][VIEW_N][CAL_N] = {
 
 /* 4.x's plain Random Walk enters through the material's own surface, of
  * index eta (Cycles: from the Principled BSDF's IOR and Specular IOR
- * Level; bssrdf->ior), and its gain at an angle follows eta: the table
- * above is eta = 1.01 (Specular IOR Level 0, what every other part of
- * the calibration measured), these are 1.5 (Level 0.5 with IOR 1.5,
- * Principled's defaults) and 1.79 (Level 1), measured the same way
- * (calibrate.py --part energy --specular 0.5 / 1, white world, r = 5 cm,
- * 48 x 48, 128 samples, the diffuse passes' ratio: standard errors
- * under 0.0023). At 70 degrees and A = 0.05 the gain is 1.27 at eta
- * 1.01, 0.97 at 1.5 and 0.94 at 1.79; head-on it moves by 2 %. */
+ * Level; bssrdf->ior) and roughness (its Roughness; bssrdf->alpha), and
+ * its gain at an angle follows both: the table above is eta = 1.01
+ * (Specular IOR Level 0, what every other part of the calibration
+ * measured; roughness 0.5, through which the roughness moves the gain by
+ * under 1.5 % up to 70 degrees and 8 % at 85), these are 1.5 (Level 0.5
+ * with IOR 1.5, Principled's defaults) and 1.79 (Level 1) at roughness
+ * 0.1, 0.25, 0.5 and 1 (calibrate.py --part energy --specular 0.5 / 1
+ * --roughness R, white world, r = 5 cm, 48 x 48, 128 samples, the
+ * diffuse passes' ratio: standard errors under 0.006). At 70 degrees and
+ * A = 0.05 the gain is 1.27 through 1.01, and through 1.5 0.89 / 0.90 /
+ * 0.97 / 1.19 from roughness 0.1 to 1; head-on it moves by 2 - 4 %. */
 static const float rw4_eta[] = {1.01f, 1.5f, 1.7887f};
 #define RW4_ETA_N ((int)(sizeof rw4_eta / sizeof *rw4_eta))
-static const float rw4_gain[RW4_ETA_N - 1][VIEW_N][CAL_N] = {
+static const float rw4_roughness[] = {0.1f, 0.25f, 0.5f, 1.0f};
+#define RW4_ROUGH_N ((int)(sizeof rw4_roughness / sizeof *rw4_roughness))
+static const float rw4_gain[RW4_ETA_N - 1][RW4_ROUGH_N][VIEW_N][CAL_N] = {
 	{ /* eta 1.5 */
-			/* 0 degrees */
-			{0.7761f, 0.7761f, 0.7888f, 0.8139f, 0.8366f, 0.8609f, 0.8851f, 0.9080f,
-			 0.9338f, 0.9624f, 0.9743f, 0.9787f, 0.9440f, 0.9152f, 0.9060f, 0.8970f},
-			/* 30 degrees */
-			{0.8086f, 0.8086f, 0.8202f, 0.8430f, 0.8640f, 0.8856f, 0.9067f, 0.9261f,
-			 0.9483f, 0.9729f, 0.9825f, 0.9843f, 0.9488f, 0.9198f, 0.9106f, 0.9015f},
-			/* 45 degrees */
-			{0.8499f, 0.8499f, 0.8605f, 0.8803f, 0.8976f, 0.9154f, 0.9322f, 0.9466f,
-			 0.9639f, 0.9833f, 0.9905f, 0.9901f, 0.9537f, 0.9246f, 0.9153f, 0.9062f},
-			/* 60 degrees */
-			{0.9137f, 0.9137f, 0.9220f, 0.9358f, 0.9465f, 0.9577f, 0.9677f, 0.9746f,
-			 0.9852f, 0.9975f, 1.0005f, 0.9971f, 0.9596f, 0.9303f, 0.9210f, 0.9118f},
-			/* 70 degrees */
-			{0.9738f, 0.9738f, 0.9783f, 0.9854f, 0.9895f, 0.9945f, 0.9981f, 0.9995f,
-			 1.0034f, 1.0093f, 1.0089f, 1.0029f, 0.9644f, 0.9350f, 0.9256f, 0.9164f},
-			/* 80 degrees */
-			{1.0716f, 1.0716f, 1.0698f, 1.0644f, 1.0569f, 1.0508f, 1.0439f, 1.0348f,
-			 1.0290f, 1.0253f, 1.0210f, 1.0112f, 0.9714f, 0.9417f, 0.9322f, 0.9229f},
-			/* 85 degrees */
-			{1.1484f, 1.1484f, 1.1402f, 1.1231f, 1.1070f, 1.0919f, 1.0768f, 1.0611f,
-			 1.0476f, 1.0369f, 1.0293f, 1.0170f, 0.9763f, 0.9465f, 0.9370f, 0.9277f},
+		{ /* roughness 0.1 */
+			{0.7681f, 0.7681f, 0.7808f, 0.8063f, 0.8309f, 0.8559f,
+			 0.8808f, 0.9047f, 0.9312f, 0.9606f, 0.9733f, 0.9780f,
+			 0.9435f, 0.9147f, 0.9055f, 0.8965f}, /* 0 */
+			{0.7964f, 0.7964f, 0.8086f, 0.8323f, 0.8551f, 0.8779f,
+			 0.9001f, 0.9208f, 0.9443f, 0.9703f, 0.9803f, 0.9828f,
+			 0.9475f, 0.9185f, 0.9093f, 0.9003f}, /* 30 */
+			{0.8294f, 0.8294f, 0.8407f, 0.8620f, 0.8817f, 0.9017f,
+			 0.9206f, 0.9373f, 0.9569f, 0.9787f, 0.9869f, 0.9878f,
+			 0.9518f, 0.9227f, 0.9134f, 0.9043f}, /* 45 */
+			{0.8678f, 0.8678f, 0.8775f, 0.8957f, 0.9118f, 0.9279f,
+			 0.9429f, 0.9554f, 0.9707f, 0.9880f, 0.9935f, 0.9922f,
+			 0.9555f, 0.9263f, 0.9170f, 0.9079f}, /* 60 */
+			{0.8913f, 0.8913f, 0.9005f, 0.9169f, 0.9298f, 0.9439f,
+			 0.9567f, 0.9666f, 0.9790f, 0.9934f, 0.9978f, 0.9951f,
+			 0.9579f, 0.9286f, 0.9193f, 0.9102f}, /* 70 */
+			{0.9035f, 0.9035f, 0.9125f, 0.9289f, 0.9426f, 0.9548f,
+			 0.9658f, 0.9751f, 0.9857f, 0.9980f, 1.0008f, 0.9973f,
+			 0.9597f, 0.9304f, 0.9211f, 0.9119f}, /* 80 */
+			{0.9130f, 0.9130f, 0.9227f, 0.9380f, 0.9454f, 0.9574f,
+			 0.9678f, 0.9774f, 0.9873f, 0.9987f, 1.0026f, 0.9990f,
+			 0.9614f, 0.9320f, 0.9226f, 0.9134f}, /* 85 */
+		},
+		{ /* roughness 0.25 */
+			{0.7687f, 0.7687f, 0.7815f, 0.8069f, 0.8312f, 0.8562f,
+			 0.8811f, 0.9050f, 0.9315f, 0.9608f, 0.9735f, 0.9782f,
+			 0.9436f, 0.9148f, 0.9056f, 0.8966f}, /* 0 */
+			{0.7981f, 0.7981f, 0.8101f, 0.8337f, 0.8561f, 0.8789f,
+			 0.9010f, 0.9214f, 0.9447f, 0.9705f, 0.9806f, 0.9831f,
+			 0.9478f, 0.9188f, 0.9096f, 0.9006f}, /* 30 */
+			{0.8319f, 0.8319f, 0.8431f, 0.8643f, 0.8833f, 0.9031f,
+			 0.9219f, 0.9383f, 0.9577f, 0.9792f, 0.9872f, 0.9880f,
+			 0.9520f, 0.9229f, 0.9136f, 0.9045f}, /* 45 */
+			{0.8739f, 0.8739f, 0.8833f, 0.9007f, 0.9161f, 0.9316f,
+			 0.9460f, 0.9575f, 0.9723f, 0.9891f, 0.9943f, 0.9928f,
+			 0.9560f, 0.9268f, 0.9175f, 0.9084f}, /* 60 */
+			{0.9028f, 0.9028f, 0.9111f, 0.9259f, 0.9373f, 0.9501f,
+			 0.9617f, 0.9702f, 0.9817f, 0.9952f, 0.9989f, 0.9959f,
+			 0.9585f, 0.9293f, 0.9200f, 0.9108f}, /* 70 */
+			{0.9250f, 0.9250f, 0.9331f, 0.9467f, 0.9601f, 0.9697f,
+			 0.9781f, 0.9829f, 0.9915f, 1.0017f, 1.0031f, 0.9985f,
+			 0.9606f, 0.9313f, 0.9219f, 0.9127f}, /* 80 */
+			{0.9502f, 0.9502f, 0.9574f, 0.9689f, 0.9771f, 0.9842f,
+			 0.9900f, 0.9944f, 1.0000f, 1.0074f, 1.0073f, 1.0017f,
+			 0.9634f, 0.9340f, 0.9246f, 0.9154f}, /* 85 */
+		},
+		{ /* roughness 0.5 */
+			{0.7761f, 0.7761f, 0.7888f, 0.8139f, 0.8366f, 0.8609f,
+			 0.8851f, 0.9080f, 0.9338f, 0.9624f, 0.9743f, 0.9787f,
+			 0.9440f, 0.9152f, 0.9060f, 0.8970f}, /* 0 */
+			{0.8086f, 0.8086f, 0.8202f, 0.8430f, 0.8640f, 0.8856f,
+			 0.9067f, 0.9261f, 0.9483f, 0.9729f, 0.9825f, 0.9843f,
+			 0.9488f, 0.9198f, 0.9106f, 0.9015f}, /* 30 */
+			{0.8499f, 0.8499f, 0.8605f, 0.8803f, 0.8976f, 0.9154f,
+			 0.9322f, 0.9466f, 0.9639f, 0.9833f, 0.9905f, 0.9901f,
+			 0.9537f, 0.9246f, 0.9153f, 0.9062f}, /* 45 */
+			{0.9137f, 0.9137f, 0.9220f, 0.9358f, 0.9465f, 0.9577f,
+			 0.9677f, 0.9746f, 0.9852f, 0.9975f, 1.0005f, 0.9971f,
+			 0.9596f, 0.9303f, 0.9210f, 0.9118f}, /* 60 */
+			{0.9738f, 0.9738f, 0.9783f, 0.9854f, 0.9895f, 0.9945f,
+			 0.9981f, 0.9995f, 1.0034f, 1.0093f, 1.0089f, 1.0029f,
+			 0.9644f, 0.9350f, 0.9256f, 0.9164f}, /* 70 */
+			{1.0716f, 1.0716f, 1.0698f, 1.0644f, 1.0569f, 1.0508f,
+			 1.0439f, 1.0348f, 1.0290f, 1.0253f, 1.0210f, 1.0112f,
+			 0.9714f, 0.9417f, 0.9322f, 0.9229f}, /* 80 */
+			{1.1484f, 1.1484f, 1.1402f, 1.1231f, 1.1070f, 1.0919f,
+			 1.0768f, 1.0611f, 1.0476f, 1.0369f, 1.0293f, 1.0170f,
+			 0.9763f, 0.9465f, 0.9370f, 0.9277f}, /* 85 */
+		},
+		{ /* roughness 1.0 */
+			{0.8030f, 0.8030f, 0.8147f, 0.8377f, 0.8585f, 0.8803f,
+			 0.9017f, 0.9224f, 0.9447f, 0.9697f, 0.9796f, 0.9824f,
+			 0.9471f, 0.9182f, 0.9090f, 0.9000f}, /* 0 */
+			{0.8614f, 0.8614f, 0.8716f, 0.8903f, 0.9067f, 0.9229f,
+			 0.9382f, 0.9511f, 0.9674f, 0.9856f, 0.9918f, 0.9909f,
+			 0.9543f, 0.9251f, 0.9158f, 0.9067f}, /* 30 */
+			{0.9429f, 0.9429f, 0.9494f, 0.9603f, 0.9669f, 0.9752f,
+			 0.9822f, 0.9872f, 0.9943f, 1.0032f, 1.0051f, 1.0006f,
+			 0.9626f, 0.9333f, 0.9239f, 0.9147f}, /* 45 */
+			{1.0736f, 1.0736f, 1.0720f, 1.0672f, 1.0580f, 1.0523f,
+			 1.0456f, 1.0369f, 1.0308f, 1.0267f, 1.0221f, 1.0123f,
+			 0.9725f, 0.9428f, 0.9333f, 0.9240f}, /* 60 */
+			{1.1958f, 1.1958f, 1.1860f, 1.1651f, 1.1408f, 1.1207f,
+			 1.1005f, 1.0794f, 1.0611f, 1.0456f, 1.0359f, 1.0217f,
+			 0.9803f, 0.9503f, 0.9408f, 0.9314f}, /* 70 */
+			{1.3648f, 1.3648f, 1.3406f, 1.2933f, 1.2456f, 1.2048f,
+			 1.1662f, 1.1287f, 1.0957f, 1.0670f, 1.0516f, 1.0322f,
+			 0.9890f, 0.9588f, 0.9492f, 0.9398f}, /* 80 */
+			{1.4815f, 1.4815f, 1.4446f, 1.3754f, 1.3119f, 1.2563f,
+			 1.2054f, 1.1570f, 1.1152f, 1.0787f, 1.0598f, 1.0377f,
+			 0.9935f, 0.9631f, 0.9534f, 0.9439f}, /* 85 */
+		},
 	},
 	{ /* eta 1.7887 */
-			/* 0 degrees */
-			{0.7816f, 0.7816f, 0.7937f, 0.8177f, 0.8396f, 0.8635f, 0.8873f, 0.9099f,
-			 0.9353f, 0.9634f, 0.9749f, 0.9789f, 0.9441f, 0.9152f, 0.9060f, 0.8970f},
-			/* 30 degrees */
-			{0.8042f, 0.8042f, 0.8161f, 0.8392f, 0.8606f, 0.8827f, 0.9043f, 0.9239f,
-			 0.9466f, 0.9718f, 0.9817f, 0.9838f, 0.9483f, 0.9193f, 0.9101f, 0.9010f},
-			/* 45 degrees */
-			{0.8369f, 0.8369f, 0.8478f, 0.8683f, 0.8876f, 0.9062f, 0.9240f, 0.9403f,
-			 0.9590f, 0.9800f, 0.9881f, 0.9885f, 0.9524f, 0.9233f, 0.9140f, 0.9049f},
-			/* 60 degrees */
-			{0.8907f, 0.8907f, 0.8990f, 0.9140f, 0.9248f, 0.9386f, 0.9514f, 0.9616f,
-			 0.9753f, 0.9909f, 0.9955f, 0.9936f, 0.9567f, 0.9275f, 0.9182f, 0.9091f},
-			/* 70 degrees */
-			{0.9376f, 0.9376f, 0.9434f, 0.9530f, 0.9597f, 0.9688f, 0.9767f, 0.9820f,
-			 0.9902f, 1.0006f, 1.0023f, 0.9983f, 0.9606f, 0.9312f, 0.9218f, 0.9126f},
-			/* 80 degrees */
-			{1.0147f, 1.0147f, 1.0161f, 1.0166f, 1.0156f, 1.0157f, 1.0151f, 1.0115f,
-			 1.0119f, 1.0145f, 1.0125f, 1.0051f, 0.9662f, 0.9367f, 0.9273f, 0.9181f},
-			/* 85 degrees */
-			{1.0800f, 1.0800f, 1.0764f, 1.0684f, 1.0596f, 1.0519f, 1.0441f, 1.0348f,
-			 1.0286f, 1.0250f, 1.0205f, 1.0108f, 0.9711f, 0.9415f, 0.9320f, 0.9227f},
+		{ /* roughness 0.1 */
+			{0.7700f, 0.7700f, 0.7822f, 0.8067f, 0.8310f, 0.8559f,
+			 0.8808f, 0.9047f, 0.9313f, 0.9607f, 0.9733f, 0.9780f,
+			 0.9434f, 0.9146f, 0.9054f, 0.8964f}, /* 0 */
+			{0.7896f, 0.7896f, 0.8017f, 0.8253f, 0.8489f, 0.8723f,
+			 0.8953f, 0.9162f, 0.9408f, 0.9679f, 0.9784f, 0.9815f,
+			 0.9464f, 0.9175f, 0.9083f, 0.8993f}, /* 30 */
+			{0.8121f, 0.8121f, 0.8236f, 0.8458f, 0.8664f, 0.8880f,
+			 0.9088f, 0.9276f, 0.9495f, 0.9738f, 0.9834f, 0.9852f,
+			 0.9497f, 0.9207f, 0.9114f, 0.9023f}, /* 45 */
+			{0.8376f, 0.8376f, 0.8477f, 0.8675f, 0.8845f, 0.9042f,
+			 0.9229f, 0.9392f, 0.9584f, 0.9799f, 0.9873f, 0.9878f,
+			 0.9517f, 0.9226f, 0.9133f, 0.9042f}, /* 60 */
+			{0.8491f, 0.8491f, 0.8592f, 0.8786f, 0.8963f, 0.9145f,
+			 0.9316f, 0.9458f, 0.9634f, 0.9832f, 0.9892f, 0.9890f,
+			 0.9527f, 0.9236f, 0.9143f, 0.9052f}, /* 70 */
+			{0.8584f, 0.8584f, 0.8682f, 0.8873f, 0.9027f, 0.9201f,
+			 0.9364f, 0.9524f, 0.9685f, 0.9866f, 0.9918f, 0.9910f,
+			 0.9544f, 0.9252f, 0.9159f, 0.9068f}, /* 80 */
+			{0.8670f, 0.8670f, 0.8775f, 0.8951f, 0.9072f, 0.9238f,
+			 0.9391f, 0.9544f, 0.9699f, 0.9871f, 0.9936f, 0.9926f,
+			 0.9560f, 0.9268f, 0.9175f, 0.9084f}, /* 85 */
+		},
+		{ /* roughness 0.25 */
+			{0.7701f, 0.7701f, 0.7826f, 0.8074f, 0.8315f, 0.8565f,
+			 0.8814f, 0.9049f, 0.9315f, 0.9609f, 0.9735f, 0.9780f,
+			 0.9434f, 0.9146f, 0.9054f, 0.8964f}, /* 0 */
+			{0.7926f, 0.7926f, 0.8045f, 0.8278f, 0.8506f, 0.8736f,
+			 0.8963f, 0.9174f, 0.9416f, 0.9684f, 0.9789f, 0.9818f,
+			 0.9466f, 0.9177f, 0.9085f, 0.8995f}, /* 30 */
+			{0.8161f, 0.8161f, 0.8272f, 0.8488f, 0.8691f, 0.8902f,
+			 0.9106f, 0.9294f, 0.9508f, 0.9746f, 0.9841f, 0.9857f,
+			 0.9501f, 0.9211f, 0.9118f, 0.9027f}, /* 45 */
+			{0.8439f, 0.8439f, 0.8538f, 0.8728f, 0.8889f, 0.9079f,
+			 0.9260f, 0.9420f, 0.9606f, 0.9813f, 0.9885f, 0.9887f,
+			 0.9526f, 0.9235f, 0.9142f, 0.9051f}, /* 60 */
+			{0.8606f, 0.8606f, 0.8703f, 0.8884f, 0.9033f, 0.9206f,
+			 0.9368f, 0.9503f, 0.9668f, 0.9852f, 0.9911f, 0.9903f,
+			 0.9538f, 0.9248f, 0.9155f, 0.9064f}, /* 70 */
+			{0.8780f, 0.8780f, 0.8872f, 0.9043f, 0.9205f, 0.9349f,
+			 0.9485f, 0.9595f, 0.9738f, 0.9901f, 0.9946f, 0.9927f,
+			 0.9558f, 0.9266f, 0.9173f, 0.9082f}, /* 80 */
+			{0.8999f, 0.8999f, 0.9079f, 0.9224f, 0.9324f, 0.9456f,
+			 0.9576f, 0.9693f, 0.9811f, 0.9948f, 0.9984f, 0.9955f,
+			 0.9582f, 0.9289f, 0.9196f, 0.9105f}, /* 85 */
+		},
+		{ /* roughness 0.5 */
+			{0.7816f, 0.7816f, 0.7937f, 0.8177f, 0.8396f, 0.8635f,
+			 0.8873f, 0.9099f, 0.9353f, 0.9634f, 0.9749f, 0.9789f,
+			 0.9441f, 0.9152f, 0.9060f, 0.8970f}, /* 0 */
+			{0.8042f, 0.8042f, 0.8161f, 0.8392f, 0.8606f, 0.8827f,
+			 0.9043f, 0.9239f, 0.9466f, 0.9718f, 0.9817f, 0.9838f,
+			 0.9483f, 0.9193f, 0.9101f, 0.9010f}, /* 30 */
+			{0.8369f, 0.8369f, 0.8478f, 0.8683f, 0.8876f, 0.9062f,
+			 0.9240f, 0.9403f, 0.9590f, 0.9800f, 0.9881f, 0.9885f,
+			 0.9524f, 0.9233f, 0.9140f, 0.9049f}, /* 45 */
+			{0.8907f, 0.8907f, 0.8990f, 0.9140f, 0.9248f, 0.9386f,
+			 0.9514f, 0.9616f, 0.9753f, 0.9909f, 0.9955f, 0.9936f,
+			 0.9567f, 0.9275f, 0.9182f, 0.9091f}, /* 60 */
+			{0.9376f, 0.9376f, 0.9434f, 0.9530f, 0.9597f, 0.9688f,
+			 0.9767f, 0.9820f, 0.9902f, 1.0006f, 1.0023f, 0.9983f,
+			 0.9606f, 0.9312f, 0.9218f, 0.9126f}, /* 70 */
+			{1.0147f, 1.0147f, 1.0161f, 1.0166f, 1.0156f, 1.0157f,
+			 1.0151f, 1.0115f, 1.0119f, 1.0145f, 1.0125f, 1.0051f,
+			 0.9662f, 0.9367f, 0.9273f, 0.9181f}, /* 80 */
+			{1.0800f, 1.0800f, 1.0764f, 1.0684f, 1.0596f, 1.0519f,
+			 1.0441f, 1.0348f, 1.0286f, 1.0250f, 1.0205f, 1.0108f,
+			 0.9711f, 0.9415f, 0.9320f, 0.9227f}, /* 85 */
+		},
+		{ /* roughness 1.0 */
+			{0.8239f, 0.8239f, 0.8347f, 0.8559f, 0.8738f, 0.8939f,
+			 0.9134f, 0.9314f, 0.9517f, 0.9744f, 0.9830f, 0.9847f,
+			 0.9491f, 0.9201f, 0.9109f, 0.9018f}, /* 0 */
+			{0.8796f, 0.8796f, 0.8889f, 0.9057f, 0.9199f, 0.9343f,
+			 0.9476f, 0.9590f, 0.9732f, 0.9894f, 0.9940f, 0.9924f,
+			 0.9555f, 0.9263f, 0.9170f, 0.9079f}, /* 30 */
+			{0.9560f, 0.9560f, 0.9616f, 0.9707f, 0.9757f, 0.9824f,
+			 0.9879f, 0.9916f, 0.9974f, 1.0052f, 1.0066f, 1.0017f,
+			 0.9636f, 0.9342f, 0.9248f, 0.9156f}, /* 45 */
+			{1.0772f, 1.0772f, 1.0748f, 1.0688f, 1.0589f, 1.0525f,
+			 1.0453f, 1.0361f, 1.0301f, 1.0260f, 1.0215f, 1.0119f,
+			 0.9721f, 0.9424f, 0.9329f, 0.9236f}, /* 60 */
+			{1.1839f, 1.1839f, 1.1745f, 1.1542f, 1.1322f, 1.1130f,
+			 1.0938f, 1.0742f, 1.0572f, 1.0429f, 1.0338f, 1.0203f,
+			 0.9791f, 0.9492f, 0.9397f, 0.9304f}, /* 70 */
+			{1.3312f, 1.3312f, 1.3090f, 1.2657f, 1.2231f, 1.1863f,
+			 1.1514f, 1.1168f, 1.0873f, 1.0617f, 1.0477f, 1.0295f,
+			 0.9867f, 0.9565f, 0.9469f, 0.9375f}, /* 80 */
+			{1.4272f, 1.4272f, 1.3951f, 1.3345f, 1.2780f, 1.2292f,
+			 1.1842f, 1.1409f, 1.1040f, 1.0718f, 1.0547f, 1.0342f,
+			 0.9906f, 0.9603f, 0.9506f, 0.9411f}, /* 85 */
+		},
 	},
 };
 
@@ -374,41 +521,58 @@ static int view_rows(float mu, float *tv)
 }
 
 /* g(A) at view rows v, v + 1 (tv between them) through a surface of index
- * eta: plain Random Walk's between the tables of rw4_eta, linear in eta
- * and held beyond them; the other walks' whatever eta. */
-static float view_gain(int32_t calibration, float eta, int v, float tv,
-                       float a)
+ * eta and roughness rough: plain Random Walk's between the tables of
+ * rw4_eta and rw4_roughness, bilinear and held beyond them (through 1.01
+ * the roughness does not count); the other walks' whatever both. */
+static float view_gain(int32_t calibration, float eta, float rough, int v,
+                       float tv, float a)
 {
-	const float (*t0)[CAL_N] = cal_gain[calibration], (*t1)[CAL_N] = t0;
-	float te = 0.0f;
-	if (calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK &&
-	    eta > rw4_eta[0]) {
-		int k = 1;
-		while (k < RW4_ETA_N - 1 && rw4_eta[k] < eta)
-			k++;
-		te = fminf((eta - rw4_eta[k - 1]) / (rw4_eta[k] - rw4_eta[k - 1]),
-		           1.0f);
-		t0 = k == 1 ? cal_gain[calibration] : rw4_gain[k - 2];
-		t1 = rw4_gain[k - 1];
+	float g0 = gain_at(cal_gain[calibration][v],
+	                   cal_gain[calibration][v + 1], tv, a);
+	if (calibration != SSS_CALIBRATION_CYCLES4_RANDOM_WALK ||
+	    !(eta > rw4_eta[0]))
+		return g0;
+	int k = 1, j = 1;
+	while (k < RW4_ETA_N - 1 && rw4_eta[k] < eta)
+		k++;
+	while (j < RW4_ROUGH_N - 1 && rw4_roughness[j] < rough)
+		j++;
+	float te = fminf((eta - rw4_eta[k - 1]) /
+	                 (rw4_eta[k] - rw4_eta[k - 1]), 1.0f);
+	float tr = fminf(fmaxf((rough - rw4_roughness[j - 1]) /
+	                       (rw4_roughness[j] - rw4_roughness[j - 1]),
+	                       0.0f), 1.0f);
+	float at[2];
+	for (int e = 0; e < 2; e++) {
+		if (k - 1 + e == 0) {
+			at[e] = g0;
+			continue;
+		}
+		const float (*r0)[CAL_N] = rw4_gain[k - 2 + e][j - 1];
+		const float (*r1)[CAL_N] = rw4_gain[k - 2 + e][j];
+		float lo = gain_at(r0[v], r0[v + 1], tv, a);
+		at[e] = lo + tr * (gain_at(r1[v], r1[v + 1], tv, a) - lo);
 	}
-	float g0 = gain_at(t0[v], t0[v + 1], tv, a);
-	return te > 0.0f ? g0 + te * (gain_at(t1[v], t1[v + 1], tv, a) - g0)
-	                 : g0;
+	return at[0] + te * (at[1] - at[0]);
 }
 
-sss_result sss_calibration_gain(int32_t calibration, float walk_ior,
+sss_result sss_calibration_gain(const sss_material *mat,
                                 const float albedo[3], float view_cosine,
                                 float gain[3])
 {
-	if (!albedo || !gain || !(walk_ior >= 1.0f && walk_ior <= 3.8f))
+	if (!mat || !albedo || !gain ||
+	    !(mat->walk_ior >= 1.0f && mat->walk_ior <= 3.8f) ||
+	    !(mat->walk_roughness >= 0.0f && mat->walk_roughness <= 1.0f))
 		return SSS_ERR_INVALID_ARGUMENT;
-	if (calibration != SSS_CALIBRATION_NONE && !is_calibration(calibration))
+	int32_t cal = mat->calibration;
+	if (cal != SSS_CALIBRATION_NONE && !is_calibration(cal))
 		return SSS_ERR_INVALID_ARGUMENT;
 	float tv;
 	int v = view_rows(fabsf(view_cosine), &tv);
 	for (int c = 0; c < 3; c++)
-		gain[c] = is_calibration(calibration)
-		          ? view_gain(calibration, walk_ior, v, tv, albedo[c])
+		gain[c] = is_calibration(cal)
+		          ? view_gain(cal, mat->walk_ior, mat->walk_roughness, v,
+		                      tv, albedo[c])
 		          : 1.0f;
 	return SSS_OK;
 }
@@ -712,8 +876,8 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
 		           ? s * mat->jimenez_strength[c] : s) * fade[c];
 		if (!(m > 0.0f))
 			continue;
-		float g = view_gain(mat->calibration, mat->walk_ior, v, tv,
-		                    diff_col[c]);
+		float g = view_gain(mat->calibration, mat->walk_ior,
+		                    mat->walk_roughness, v, tv, diff_col[c]);
 		if (shape) {
 			/* The table was measured head-on; seen at an angle the
 			 * flat gain g(A, mu) already holds the walk's excess near a

@@ -156,7 +156,10 @@ X("calibration", calibration, ENUM, ALL, ALWAYS, SSS_CALIBRATION_NONE, 0, \
   "the random walk whose energy is matched") \
 X("walk_ior", walk_ior, F32, ALL, ALWAYS, 1.5f, 0, 0, 1, 3.8, 0, \
   SSS__NO_NAMES, "the index of the surface the walk enters through " \
-  "(4.x Random Walk: from IOR and Specular IOR Level)")
+  "(4.x Random Walk: from IOR and Specular IOR Level)") \
+X("walk_roughness", walk_roughness, F32, ALL, ALWAYS, 0.5f, 0, 0, 0, 1, 0, \
+  SSS__NO_NAMES, "that surface's roughness (4.x Random Walk: the " \
+  "material's Roughness)")
 /* clang-format on */
 
 #endif

@@ -38,6 +38,18 @@ static void flat_passes(sss_passes *p, float *dd, float *col, float *z,
 	p->index_ma = (sss_image){idx, W, H, 1, 0};
 }
 
+/* sss_calibration_gain for a Burley material of calibration cal whose walk
+ * enters through index ior (roughness 0.5). */
+static sss_result gain_of(int32_t cal, float ior, const float *albedo,
+                          float mu, float *g)
+{
+	sss_material m;
+	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.calibration = cal;
+	m.walk_ior = ior;
+	return sss_calibration_gain(&m, albedo, mu, g);
+}
+
 static void test_table(void)
 {
 	static const int32_t cals[] = {SSS_CALIBRATION_CYCLES_RANDOM_WALK,
@@ -53,7 +65,7 @@ static void test_table(void)
 			float mu = 1.0f - (float)v / 20.0f, prev = -1.0f;
 			for (int i = 0; i <= 1000; i++) {
 				float a = (float)i / 1000.0f, al[3] = {a, a, a}, g[3];
-				ok &= sss_calibration_gain(cals[k], etas[e], al, mu, g) ==
+				ok &= gain_of(cals[k], etas[e], al, mu, g) ==
 				      SSS_OK;
 				finite &= isfinite(g[0]) && g[0] == g[1] && g[1] == g[2];
 				sane &= g[0] > 0.7f && g[0] < 1.8f;
@@ -74,29 +86,29 @@ static void test_table(void)
 	/* 4.x/5.x head-on: the measured points (section 4 of
 	 * sss_calibration.c). */
 	float al4[3] = {0.05f, 0.5f, 0.9f}, g4[3];
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.5f, al4, 1.0f, g4);
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.5f, al4, 1.0f, g4);
 	CHECK("table4-skin", fabsf(g4[0] - 0.8975f) < 1e-6f &&
 	      fabsf(g4[1] - 0.9537f) < 1e-6f && fabsf(g4[2] - 0.9923f) < 1e-6f,
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.01f, al4, 1.0f,
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.01f, al4, 1.0f,
 	                     g4);
 	CHECK("table4-rw", fabsf(g4[0] - 0.7675f) < 1e-6f &&
 	      fabsf(g4[1] - 0.8806f) < 1e-6f && fabsf(g4[2] - 0.9780f) < 1e-6f,
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
 	/* plain Random Walk through Principled's default surface (1.5), and
 	 * at 70 degrees between 1.01 and 1.5, linear in eta */
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, 1.0f,
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, 1.0f,
 	                     g4);
 	CHECK("table4-rw-ior", fabsf(g4[0] - 0.7761f) < 1e-6f &&
 	      fabsf(g4[1] - 0.8851f) < 1e-6f && fabsf(g4[2] - 0.9787f) < 1e-6f,
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
 	{
 		float lo[3], hi[3], at[3], mu70 = 0.3420201f;
-		sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.01f,
+		gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.01f,
 		                     al4, mu70, lo);
-		sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4,
+		gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4,
 		                     mu70, hi);
-		sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.255f,
+		gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.255f,
 		                     al4, mu70, at);
 		CHECK("table4-rw-ior-between", fabsf(lo[0] - 1.2732f) < 1e-6f &&
 		      fabsf(hi[0] - 0.9738f) < 1e-6f &&
@@ -104,28 +116,53 @@ static void test_table(void)
 		      "%g at 1.01, %g at 1.5, %g at 1.255", (double)lo[0],
 		      (double)hi[0], (double)at[0]);
 		CHECK_STATUS("bad-walk-ior", SSS_ERR_INVALID_ARGUMENT,
-		             sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK,
-		                                  0.9f, al4, 1.0f, at));
+		             gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 0.9f, al4,
+		                     1.0f, at));
 		CHECK_STATUS("nan-walk-ior", SSS_ERR_INVALID_ARGUMENT,
-		             sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK,
-		                                  NAN, al4, 1.0f, at));
+		             gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, NAN, al4,
+		                     1.0f, at));
+		sss_material m;
+		sss_material_default(&m, SSS_PROFILE_BURLEY);
+		m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
+		m.walk_roughness = 1.5f;
+		CHECK_STATUS("bad-walk-roughness", SSS_ERR_INVALID_ARGUMENT,
+		             sss_calibration_gain(&m, al4, 1.0f, at));
+		CHECK_STATUS("null-material", SSS_ERR_INVALID_ARGUMENT,
+		             sss_calibration_gain(NULL, al4, 1.0f, at));
+		/* and its roughness: linear between the measured 0.25 and 0.5,
+		 * far brighter at 1 (A = 0.05 at 70 degrees through 1.5) */
+		float r25[3], r50[3], r100[3];
+		m.walk_ior = 1.5f;
+		m.walk_roughness = 0.25f;
+		sss_calibration_gain(&m, al4, mu70, r25);
+		m.walk_roughness = 0.5f;
+		sss_calibration_gain(&m, al4, mu70, r50);
+		m.walk_roughness = 1.0f;
+		sss_calibration_gain(&m, al4, mu70, r100);
+		m.walk_roughness = 0.375f;
+		sss_calibration_gain(&m, al4, mu70, at);
+		CHECK("table4-rw-roughness",
+		      fabsf(at[0] - 0.5f * (r25[0] + r50[0])) < 1e-5f &&
+		      r50[0] == hi[0] && r100[0] > 1.15f && r25[0] < 0.92f,
+		      "%g at 0.25, %g at 0.375, %g at 0.5, %g at 1", (double)r25[0],
+		      (double)at[0], (double)r50[0], (double)r100[0]);
 	}
 	/* Seen at 60 degrees (mu 0.5, a row), the sign of mu ignored; past
 	 * the last row (85 degrees) held; between rows linear in mu. */
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.5f, al4, -0.5f,
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.5f, al4, -0.5f,
 	                     g4);
 	CHECK("table4-skin-60", fabsf(g4[0] - 1.0423f) < 1e-6f &&
 	      fabsf(g4[1] - 1.0294f) < 1e-6f && fabsf(g4[2] - 1.0077f) < 1e-6f,
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.5f, al4, 0.0f,
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN, 1.5f, al4, 0.0f,
 	                     g4);
 	CHECK("table4-skin-90", fabsf(g4[0] - 1.2665f) < 1e-6f &&
 	      fabsf(g4[1] - 1.1137f) < 1e-6f, "%g %g", (double)g4[0],
 	      (double)g4[1]);
 	float mid = 0.5f * (0.5f + 0.3420201f), g60[3], g70[3];
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, mid, g4);
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, 0.5f, g60);
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, 0.3420201f,
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, mid, g4);
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, 0.5f, g60);
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, al4, 0.3420201f,
 	                     g70);
 	CHECK("table4-between", fabsf(g4[1] - 0.5f * (g60[1] + g70[1])) < 1e-5f,
 	      "%g between %g and %g", (double)g4[1], (double)g60[1],
@@ -133,25 +170,25 @@ static void test_table(void)
 
 	/* 3.4: a gain of about 1.01 head-on, from the view alone beyond. */
 	float al[3] = {0.3f, 0.8f, 1.0f}, g[3];
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, al, 1.0f, g);
+	gain_of(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, al, 1.0f, g);
 	CHECK("table-measured", fabsf(g[0] - 1.0138f) < 1e-6f &&
 	      fabsf(g[1] - 1.0080f) < 1e-6f && fabsf(g[2] - 0.9211f) < 1e-6f,
 	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, al, NAN, g4);
+	gain_of(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, al, NAN, g4);
 	CHECK("table-nan-view", g4[0] == g[0] && g4[1] == g[1] && g4[2] == g[2],
 	      "%g %g %g", (double)g4[0], (double)g4[1], (double)g4[2]);
 	float odd[3] = {-1.0f, 2.0f, NAN};
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, odd, 1.0f, g);
+	gain_of(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, odd, 1.0f, g);
 	CHECK("table-clamp", g[0] == 1.0090f && g[1] == 0.9211f && g[2] == 1.0f,
 	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
 
-	sss_calibration_gain(SSS_CALIBRATION_NONE, 1.5f, al, 1.0f, g);
+	gain_of(SSS_CALIBRATION_NONE, 1.5f, al, 1.0f, g);
 	CHECK("none-is-one", g[0] == 1.0f && g[1] == 1.0f && g[2] == 1.0f,
 	      "%g %g %g", (double)g[0], (double)g[1], (double)g[2]);
 	CHECK_STATUS("bad-calibration", SSS_ERR_INVALID_ARGUMENT,
-	             sss_calibration_gain(7, 1.5f, al, 1.0f, g));
+	             gain_of(7, 1.5f, al, 1.0f, g));
 	CHECK_STATUS("null", SSS_ERR_INVALID_ARGUMENT,
-	             sss_calibration_gain(SSS_CALIBRATION_NONE, 1.5f, NULL, 1.0f, g));
+	             gain_of(SSS_CALIBRATION_NONE, 1.5f, NULL, 1.0f, g));
 }
 
 /* d / radius of m with `mapping` at each albedo a[i] against fit[i],
@@ -267,7 +304,7 @@ static void test_apply(void)
 	const float col[3] = {0.3f, 0.8f, 0.97f};
 	float g[3], out[3];
 	int same;
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, col, 1.0f, g);
+	gain_of(SSS_CALIBRATION_CYCLES_RANDOM_WALK, 1.5f, col, 1.0f, g);
 	for (int t = 0; t < 2; t++) {
 		sss_material m;
 		sss_material_default(&m, SSS_PROFILE_BURLEY);
@@ -339,7 +376,7 @@ static void test_fade(void)
 	const float col[3] = {0.05f, 0.3f, 0.8f};
 	float g[3], out[3], prev[3];
 	int same;
-	sss_calibration_gain(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, col, 1.0f, g);
+	gain_of(SSS_CALIBRATION_CYCLES4_RANDOM_WALK, 1.5f, col, 1.0f, g);
 	sss_material m = calibrated(col);
 	const struct { double radius, fade; } at[] = {
 		{1e-12, 0.0}, {1e-8, 0.0}, {1e-5, 0.0}, {1e-4, 0.5},
@@ -390,7 +427,7 @@ static void test_view(void)
 		int same;
 		CHECK_STATUS("view-status", SSS_OK,
 		             run_tilted(&m, 1.0f, col, 2.0f, tilt, out, &same));
-		sss_calibration_gain(m.calibration, m.walk_ior, col, (float)cos(tilt), g);
+		sss_calibration_gain(&m, col, (float)cos(tilt), g);
 		for (int c = 0; c < 3; c++)
 			CHECK("view-gain", fabsf(out[c] - 2.0f * g[c]) < 2e-4f,
 			      "%g degrees, channel %d: %g, expected %g", degrees[k],

@@ -167,7 +167,7 @@ static double view_gain(const frame *f, const sss_material *m, int y)
 	double cosv = f->cam.type == SSS_CAMERA_PERSPECTIVE
 	              ? (p[1] + p[2]) / sqrt(2.0) / len : sqrt(0.5);
 	float g[3];
-	sss_calibration_gain(m->calibration, m->walk_ior, m->albedo, (float)cosv, g);
+	sss_calibration_gain(m, m->albedo, (float)cosv, g);
 	return g[0];
 }
 

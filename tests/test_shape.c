@@ -289,7 +289,7 @@ static void test_apply(void)
 		             sss_apply(&f.ps, &f.cam, &m, 1, &f.opt, NULL, &ol,
 		                       NULL, 0));
 		float g[3];
-		sss_calibration_gain(m.calibration, m.walk_ior, a3, 1.0f, g);
+		sss_calibration_gain(&m, a3, 1.0f, g);
 		const float *o = f.out + 3 * (N * (N / 2) + N / 2);
 		for (int c = 0; c < 3; c++) {
 			double want = 2.0 * g[c] *
@@ -307,7 +307,7 @@ static void test_apply(void)
 		                            y);
 		double H = sss__mean_curvature(&f.ps.depth, f.slot, &f.proj, N, N,
 		                               x, y, radii[k]);
-		sss_calibration_gain(m.calibration, m.walk_ior, a3, mu, g);
+		sss_calibration_gain(&m, a3, mu, g);
 		o = f.out + 3 * (N * y + x);
 		for (int c = 0; c < 3; c++) {
 			double sg = sss__shape_gain(m.calibration, a3[c],
@@ -334,7 +334,7 @@ static void test_rise_and_fall(void)
 	const float rise[3] = {1, 1, 1}, fall[3] = {100, 100, 100};
 	const float mu = 0.6f;
 	float g[3];
-	sss_calibration_gain(m.calibration, m.walk_ior, col, mu, g);
+	sss_calibration_gain(&m, col, mu, g);
 	float up[3] = {1, 1, 1}, down[3] = {1, 1, 1}, flat[3] = {1, 1, 1};
 	sss__calibration_apply(&m, fade, mu, rise, NULL, col, up);
 	sss__calibration_apply(&m, fade, mu, fall, NULL, col, down);
@@ -364,7 +364,7 @@ static void test_backlit(void)
 	m.transmission = SSS_TRANSMISSION_BURLEY;
 	sss_image ol = {f.out, N, N, 3, 0};
 	float g[3];
-	sss_calibration_gain(m.calibration, m.walk_ior, a3, 1.0f, g);
+	sss_calibration_gain(&m, a3, 1.0f, g);
 	const float *o = f.out + 3 * (N * (N / 2) + N / 2);
 	for (int lit = 0; lit < 2; lit++) {
 		if (lit) {
@@ -572,7 +572,7 @@ static void test_far(void)
 				n++;
 			}
 		float g[3];
-		sss_calibration_gain(m.calibration, m.walk_ior, a3, 1.0f, g);
+		sss_calibration_gain(&m, a3, 1.0f, g);
 		for (int c = 0; c < 3; c++) {
 			float w;
 			double whole = sss__far_gain(m.calibration, a3[c], x, &w);

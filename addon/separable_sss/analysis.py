@@ -25,8 +25,10 @@ class Found:
     # How much of the diffuse lobe scatters: Principled v2's Subsurface
     # Weight (1 for 3.x's Subsurface factor and the Subsurface node).
     weight: float = 1.0
-    # The index of the surface 4.x's plain Random Walk enters through.
+    # The index and roughness of the surface 4.x's plain Random Walk
+    # enters through.
     walk_ior: float = 1.5
+    walk_roughness: float = 0.5
 
 
 @dataclass
@@ -112,7 +114,7 @@ def analyse(scene):
                               tuple(v * unit for v in sss.radius),
                               sss.color, compat.method(node),
                               switch in sss.linked, sss.albedo, sss.weight,
-                              sss.walk_ior)
+                              sss.walk_ior, sss.walk_roughness)
                 result.messages.extend(_principled_notes(mat, sss, switch))
             elif node.type == "SUBSURFACE_SCATTERING":
                 scale = node.inputs["Scale"].default_value
@@ -126,6 +128,10 @@ def analyse(scene):
                 if ior is not None:
                     found.walk_ior = min(max(float(ior.default_value),
                                              1.01), 3.8)
+                rough = node.inputs.get("Roughness")
+                if rough is not None:
+                    found.walk_roughness = min(max(float(
+                        rough.default_value), 0.0), 1.0)
             if found:
                 result.materials.append(found)
                 break  # one profile per material

@@ -133,6 +133,7 @@ class PrincipledSSS:
     ior: float = 1.4
     anisotropy: float = 0.0
     walk_ior: float = 1.5  # the surface plain Random Walk enters through
+    walk_roughness: float = 0.5   # and its roughness
 
 
 def walk_ior(ior, specular_level):
@@ -173,7 +174,9 @@ def principled_sss(node):
                   .default_value),
             walk_ior(float(principled_input(node, "ior").default_value),
                      float(principled_input(node, "specular")
-                           .default_value)))
+                           .default_value)),
+            min(max(float(principled_input(node, "roughness")
+                          .default_value), 0.0), 1.0))
     color = principled_input(node, "subsurface_color")
     socks = (weight, radius, color, base)
     f = 1.0 if weight.is_linked else float(weight.default_value)

@@ -23,12 +23,12 @@ def method_name(identifier):
 
 # The fields the add-on works out itself instead of offering them as
 # settings: the calibration follows Match Energy, the baked scale the
-# back-light layer (_with_baked), the walk's index the material's IOR and
-# Specular IOR Level (_burley). thin_reflectance stays the library's 0:
+# back-light layer (_with_baked), the walk's surface the material's IOR,
+# Specular IOR Level and Roughness (_burley). thin_reflectance stays the library's 0:
 # the layer's thickness is too coarse for it (docs/transmission.md, "Thin
 # parts lit from the front").
 DERIVED = ("transmission_baked_scale", "calibration", "thin_reflectance",
-           "walk_ior")
+           "walk_ior", "walk_roughness")
 
 # The setting a field is stored as where it is not the field's member
 # (the name .blend files and presets already hold).
@@ -126,8 +126,10 @@ def _burley(found, entry, fields):
     if s.match_energy and walk:
         entry["calibration"] = walk[1]
         # 4.x's plain Random Walk enters through the material's own
-        # surface, and its energy follows that surface's index.
+        # surface, and its energy follows that surface's index and
+        # roughness.
         entry["walk_ior"] = found.walk_ior
+        entry["walk_roughness"] = found.walk_roughness
 
 
 def camera_entry(scene):

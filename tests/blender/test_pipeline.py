@@ -262,7 +262,8 @@ def test_description_follows_the_method(blends, tmp_path, method):
 
 # 4.x's plain Random Walk enters through the material's own surface, whose
 # index Cycles makes from IOR and Specular IOR Level (F0 scaled by twice
-# the level, clamped to 1.01 .. 3.8); the calibration follows it.
+# the level, clamped to 1.01 .. 3.8), with the material's Roughness; the
+# calibration follows both.
 @pytest.mark.skipif(not compat.CYCLES_WALK_V2, reason="4.x's walk")
 @pytest.mark.parametrize("ior, level, want", [
     (1.5, 0.5, 1.5), (1.5, 0.0, 1.01), (1.5, 1.0, 1.7887), (1.33, 0.5, 1.33),
@@ -274,6 +275,7 @@ def test_description_takes_the_walks_surface(blends, tmp_path, ior, level,
     compat.set_method(node, "RANDOM_WALK")
     compat.principled_input(node, "ior").default_value = ior
     compat.principled_input(node, "specular").default_value = level
+    compat.principled_input(node, "roughness").default_value = 0.3
     path = str(tmp_path / "scene.json")
     found = pipeline.analyse(scene)
     with pipeline.switched_off(scene, found, backlight=False):
@@ -281,6 +283,7 @@ def test_description_takes_the_walks_surface(blends, tmp_path, ior, level,
     skin = [m for m in json.load(open(path))["materials"]
             if m["name"] == "Skin"][0]
     assert skin["walk_ior"] == pytest.approx(want, abs=1e-4)
+    assert skin["walk_roughness"] == pytest.approx(0.3)
     from separable_sss import native
     with native.Scene(path) as loaded:
         assert loaded.warnings == []
