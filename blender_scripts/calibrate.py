@@ -46,7 +46,8 @@ crease: the box's top edge (a sharp 90-degree convex edge) seen at 45
   there is fitted against: the walk's gain on the top face, its loss on
   the front face), per row of the frame (t: metres along each face from
   the edge, negative on the front face), over the scattered front face's
-  plateau. Written to DIR/crease_METHOD.csv.
+  plateau, every image less its specular reflection (--specular). Written
+  to DIR/crease_METHOD.csv.
 shape: a sphere of radius 4 cm (128 x 64 segments, smooth) seen head-on by
   an orthographic camera 12 cm wide, under a sun along the view, with the
   radius r = x a for each x of SHAPE_X (x: the radius times the sphere's
@@ -89,6 +90,7 @@ ALBEDO_SETS = ((0.05, 0.1, 0.2), (0.3, 0.4, 0.5), (0.6, 0.7, 0.8),
 VIEW = 0.2   # metres of slab face the camera sees
 SPECULAR = 0.0   # the measured material's specular input (--specular)
 ROUGHNESS = 0.5  # and its roughness (--roughness)
+MEASURED_IOR = 1.5   # and its IOR (4.x's default)
 SHAPE_RADIUS = 0.04   # the shape part's sphere, metres
 SHAPE_X = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
 
@@ -184,6 +186,7 @@ def measured_material(name):
     bsdf = compat.ensure_nodes(mat).nodes["Principled BSDF"]
     compat.principled_input(bsdf, "specular").default_value = SPECULAR
     compat.principled_input(bsdf, "roughness").default_value = ROUGHNESS
+    compat.principled_input(bsdf, "ior").default_value = MEASURED_IOR
     return mat
 
 
@@ -285,10 +288,17 @@ def render_to(scene, path, seed):
     return read_exr(path), seconds
 
 
+def glossy(ch):
+    """The specular layer's reflection in a render (0 without one)."""
+    return (rgb(ch, "GlossDir") + rgb(ch, "GlossInd")) * rgb(ch, "GlossCol")
+
+
 def walk_and_off(scene, mat, albedo, radius, args, name):
     """Renders the material with the random walk (seed 2) and with
     Subsurface 0 (seed 1, kept as work/NAME_off_TAG.exr for libsss): the
-    two Combined images and the SSS-off render's path."""
+    two Combined images less their specular reflection (none but with
+    --specular; the same in both, and not what scatters) and the SSS-off
+    render's path."""
     tag = f"{radius}_{albedo[0]}"
     set_material(mat, albedo, radius, 1.0, args.method)
     rw, _ = render_to(scene, os.path.join(args.out, "work",
@@ -296,7 +306,8 @@ def walk_and_off(scene, mat, albedo, radius, args, name):
     set_material(mat, albedo, radius, 0.0, args.method)
     inp = os.path.join(args.out, "work", f"{name}_off_{tag}.exr")
     off, _ = render_to(scene, inp, 1)
-    return rgb(rw, "Combined"), rgb(off, "Combined"), inp
+    return (rgb(rw, "Combined") - glossy(rw), rgb(off, "Combined") -
+            glossy(off), inp)
 
 
 def albedo_sets(args):
@@ -381,10 +392,13 @@ def write_csv(path, rows):
 def scene_json(path, albedo, radius, mapping, texturing="post",
                calibration=None, **top):
     """One Burley material as libsss's scene file; `top`: top-level keys
-    over the defaults (method, taps, ...)."""
+    over the defaults (method, taps, ...). The surface the walk enters
+    through is the measured material's (--specular, --roughness)."""
     mat = {"pass_index": 1, "profile": "burley",
            "radius": [radius] * 3, "mapping": mapping,
-           "albedo": [float(a) for a in albedo], "texturing": texturing}
+           "albedo": [float(a) for a in albedo], "texturing": texturing,
+           "walk_ior": compat.walk_ior(MEASURED_IOR, SPECULAR),
+           "walk_roughness": ROUGHNESS}
     if calibration:
         mat["calibration"] = calibration
     desc = {"version": 1,
@@ -603,13 +617,14 @@ def part_crease(args):
             # over (what the term is fitted against, for the walks whose
             # blur stops there).
             images = []
+            shine = glossy(read_exr(inp))  # the off render's, in each
             for crease in (0, 1, 2):
                 desc = inp.replace(".exr", f"_crease{crease}.json")
                 scene_json(desc, albedo, radius, mapping,
                            calibration=calibration, method="separable",
                            taps=33, crease=crease)
-                images.append(scatter(inp, desc, desc.replace(".json",
-                                                              "_sss.exr")))
+                images.append(scatter(inp, desc, desc.replace(
+                    ".json", "_sss.exr")) - shine)
             ours, creased, stopped = images
             # Rows top to bottom: the top face, then the front face; one
             # value per row over the middle half of the columns.

@@ -919,10 +919,13 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
  *    Random Walk (Skin), at 2 and 6 cm they agree within 8 % above
  *    A = 0.5 with gamma 0.15 - 0.16: the profile follows the radius. Its
  *    plain Random Walk (SSS_CALIBRATION_CYCLES4_RANDOM_WALK) keeps the
- *    light much closer to the edge below A = 0.8 (gamma 0.03 - 0.13):
+ *    light much closer to the edge below A = 0.8 (gamma 0.025 - 0.13):
  *    its rows were measured with a camera 0.1 m wide at 192 x 192, so
- *    that d spans pixels. Blender 3.4.1's Random Walk for
- *    SSS_CALIBRATION_CYCLES_RANDOM_WALK (96 x 96 over 0.2 m).
+ *    that d spans pixels, through Principled's default surface (index
+ *    1.5, roughness 0.5: --specular 0.5; see rw4_gain), where it carries
+ *    a tenth to a half more than through 1.01 (gain kappa at A = 1 / 0.05).
+ *    Blender 3.4.1's Random Walk for SSS_CALIBRATION_CYCLES_RANDOM_WALK
+ *    (96 x 96 over 0.2 m).
  *    A = 0 is as 0.05. At exactly A = 1 both Random Walk (Skin) of 4.5
  *    and 3.4's Random Walk measured no excess (under 0.003 at 3 and
  *    5 cm), and plain Random Walk the row it has. kappa is interpolated
@@ -948,8 +951,8 @@ static const float crease_kappa[][CAL_N] = {
 		11.897f, 11.897f, 6.690f, 4.010f, 3.088f, 2.558f, 2.195f, 1.897f,
 		1.644f, 1.426f, 1.204f, 1.037f, 1.004f, 1.018f, 1.018f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		1.568f, 1.568f, 1.628f, 1.607f, 1.510f, 1.516f, 1.401f, 1.326f,
-		1.246f, 1.149f, 1.062f, 1.026f, 1.006f, 1.006f, 1.006f, 1.006f},
+		2.464f, 2.464f, 2.298f, 2.217f, 2.030f, 1.991f, 1.796f, 1.657f,
+		1.524f, 1.375f, 1.255f, 1.195f, 1.131f, 1.120f, 1.117f, 1.114f},
 };
 static const float crease_gamma[][CAL_N] = {
 	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
@@ -959,7 +962,7 @@ static const float crease_gamma[][CAL_N] = {
 		0.41f, 0.41f, 0.37f, 0.31f, 0.26f, 0.22f, 0.19f, 0.17f,
 		0.15f, 0.11f, 0.095f, 0.065f, 0.07f, 0.07f, 0.07f, 0.07f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		0.03f, 0.03f, 0.03f, 0.035f, 0.045f, 0.05f, 0.065f, 0.08f,
+		0.025f, 0.025f, 0.03f, 0.035f, 0.045f, 0.05f, 0.065f, 0.08f,
 		0.10f, 0.13f, 0.16f, 0.18f, 0.19f, 0.19f, 0.19f, 0.19f},
 };
 #define CREASE_ROWS ((int32_t)(sizeof crease_kappa / sizeof *crease_kappa))
@@ -974,8 +977,8 @@ static const float crease_loss_kappa[][CAL_N] = {
 		4.499f, 4.499f, 2.603f, 1.677f, 1.403f, 1.254f, 1.136f, 1.091f,
 		1.063f, 0.936f, 0.877f, 0.756f, 0.779f, 0.728f, 0.728f, 0.0f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		0.167f, 0.167f, 0.195f, 0.260f, 0.362f, 0.464f, 0.569f, 0.682f,
-		0.780f, 0.803f, 0.812f, 0.807f, 0.813f, 0.813f, 0.813f, 0.814f},
+		0.292f, 0.292f, 0.326f, 0.420f, 0.561f, 0.678f, 0.790f, 0.904f,
+		0.998f, 1.017f, 1.035f, 1.022f, 0.877f, 0.834f, 0.818f, 0.814f},
 };
 static const float crease_loss_gamma[][CAL_N] = {
 	[SSS_CALIBRATION_CYCLES_RANDOM_WALK] = {
@@ -985,8 +988,8 @@ static const float crease_loss_gamma[][CAL_N] = {
 		0.34f, 0.34f, 0.35f, 0.34f, 0.31f, 0.27f, 0.24f, 0.21f,
 		0.17f, 0.12f, 0.11f, 0.07f, 0.07f, 0.08f, 0.08f, 0.08f},
 	[SSS_CALIBRATION_CYCLES4_RANDOM_WALK] = {
-		0.26f, 0.26f, 0.24f, 0.21f, 0.16f, 0.14f, 0.13f, 0.12f,
-		0.12f, 0.14f, 0.15f, 0.16f, 0.16f, 0.16f, 0.16f, 0.16f},
+		0.16f, 0.16f, 0.15f, 0.13f, 0.10f, 0.095f, 0.095f, 0.095f,
+		0.10f, 0.12f, 0.13f, 0.15f, 0.26f, 0.31f, 0.33f, 0.34f},
 };
 
 static void crease_row(const float (*kt)[CAL_N], const float (*gt)[CAL_N],
