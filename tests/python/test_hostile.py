@@ -304,8 +304,11 @@ def big_render(blender_render, tmp_path_factory):
 def test_signal_mid_write_leaves_no_temporary(sss_cmd, blender_render,
                                               big_render, tmp_path, sig):
     out = tmp_path / "out.exr"
+    # sss leaves a signal its parent ignores ignored (nohup's SIGHUP):
+    # the command gets the default disposition, as from a terminal.
     proc = subprocess.Popen([sss_cmd, *map(str, args_for(
-        blender_render, big_render, out, "--threads", "1", "-q"))])
+        blender_render, big_render, out, "--threads", "1", "-q"))],
+        preexec_fn=lambda: signal.signal(sig, signal.SIG_DFL))
     deadline = time.monotonic() + HANG
     while not list(tmp_path.glob(".out.exr.tmp-*")):
         assert proc.poll() is None, "finished before its write was seen"
