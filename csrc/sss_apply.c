@@ -223,8 +223,10 @@ static void add_crease(const rows_ctx *ctx, size_t i, float mu,
 			extra[c] = root > 0.0f ? extra[c] / root : 0.0f;
 		}
 	}
-	sss__calibration_apply(&ctx->materials[k], ctx->kernels[k].calibration_fade,
-	                       mu, NULL, NULL, col, extra);
+	sss__calibration_apply(&ctx->materials[k],
+	                       ctx->kernels[k].calibration_gain,
+	                       ctx->kernels[k].calibration_fade, mu, NULL, NULL,
+	                       col, extra);
 	for (int c = 0; c < 3; c++)
 		light[c] += extra[c];
 }
@@ -307,7 +309,9 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 					for (int c = 0; c < 3; c++)
 						shape[c] = H * r[c];
 				}
-				sss__calibration_apply(m, fade, mu, shaped ? shape : NULL,
+				sss__calibration_apply(m,
+				                       kernels[slot[i]].calibration_gain,
+				                       fade, mu, shaped ? shape : NULL,
 				                       whole ? far : NULL, col, light);
 				if (ctx->crease)
 					add_crease(ctx, i, mu, col, light);

@@ -156,6 +156,8 @@
  */
 #include "sss_internal.h"
 
+#include <string.h>
+
 /* Reflectance of the random walk over the Principled diffuse lobe's, at
  * the albedos of cal_albedo seen at the angles of cal_view_cosine, per
  * calibration (section 4; the 0-degree rows are sections 1 and 3 measured
@@ -520,18 +522,25 @@ static int view_rows(float mu, float *tv)
 	return v;
 }
 
-/* g(A) at view rows v, v + 1 (tv between them) through a surface of index
- * eta and roughness rough: plain Random Walk's between the tables of
- * rw4_eta and rw4_roughness, bilinear and held beyond them (through 1.01
- * the roughness does not count); the other walks' whatever both. */
-static float view_gain(int32_t calibration, float eta, float rough, int v,
-                       float tv, float a)
+_Static_assert(VIEW_N * CAL_N == SSS__CAL_TABLE, "SSS__CAL_TABLE");
+
+/* The material's table: its calibration's, and for plain Random Walk the
+ * tables of rw4_eta and rw4_roughness around its surface blended
+ * bilinearly (held beyond them; through 1.01 the roughness does not
+ * count). gain_at is linear in the table, so this is the gains' blend. */
+void sss__calibration_table(const sss_material *mat,
+                            float table[SSS__CAL_TABLE])
 {
-	float g0 = gain_at(cal_gain[calibration][v],
-	                   cal_gain[calibration][v + 1], tv, a);
-	if (calibration != SSS_CALIBRATION_CYCLES4_RANDOM_WALK ||
-	    !(eta > rw4_eta[0]))
-		return g0;
+	int32_t cal = mat->calibration;
+	if (!is_calibration(cal)) {
+		for (int i = 0; i < SSS__CAL_TABLE; i++)
+			table[i] = 1.0f;
+		return;
+	}
+	memcpy(table, cal_gain[cal], sizeof(float) * SSS__CAL_TABLE);
+	float eta = mat->walk_ior, rough = mat->walk_roughness;
+	if (cal != SSS_CALIBRATION_CYCLES4_RANDOM_WALK || !(eta > rw4_eta[0]))
+		return;
 	int k = 1, j = 1;
 	while (k < RW4_ETA_N - 1 && rw4_eta[k] < eta)
 		k++;
@@ -542,18 +551,18 @@ static float view_gain(int32_t calibration, float eta, float rough, int v,
 	float tr = fminf(fmaxf((rough - rw4_roughness[j - 1]) /
 	                       (rw4_roughness[j] - rw4_roughness[j - 1]),
 	                       0.0f), 1.0f);
-	float at[2];
-	for (int e = 0; e < 2; e++) {
-		if (k - 1 + e == 0) {
-			at[e] = g0;
-			continue;
-		}
-		const float (*r0)[CAL_N] = rw4_gain[k - 2 + e][j - 1];
-		const float (*r1)[CAL_N] = rw4_gain[k - 2 + e][j];
-		float lo = gain_at(r0[v], r0[v + 1], tv, a);
-		at[e] = lo + tr * (gain_at(r1[v], r1[v + 1], tv, a) - lo);
+	const float *lo0 = &cal_gain[cal][0][0], *lo1 = lo0; /* eta k - 1 */
+	if (k > 1) {
+		lo0 = &rw4_gain[k - 2][j - 1][0][0];
+		lo1 = &rw4_gain[k - 2][j][0][0];
 	}
-	return at[0] + te * (at[1] - at[0]);
+	const float *hi0 = &rw4_gain[k - 1][j - 1][0][0];
+	const float *hi1 = &rw4_gain[k - 1][j][0][0];
+	for (int i = 0; i < SSS__CAL_TABLE; i++) {
+		float lo = lo0[i] + tr * (lo1[i] - lo0[i]);
+		float hi = hi0[i] + tr * (hi1[i] - hi0[i]);
+		table[i] = lo + te * (hi - lo);
+	}
 }
 
 sss_result sss_calibration_gain(const sss_material *mat,
@@ -567,12 +576,13 @@ sss_result sss_calibration_gain(const sss_material *mat,
 	int32_t cal = mat->calibration;
 	if (cal != SSS_CALIBRATION_NONE && !is_calibration(cal))
 		return SSS_ERR_INVALID_ARGUMENT;
-	float tv;
+	float tv, table[SSS__CAL_TABLE];
 	int v = view_rows(fabsf(view_cosine), &tv);
+	sss__calibration_table(mat, table);
 	for (int c = 0; c < 3; c++)
 		gain[c] = is_calibration(cal)
-		          ? view_gain(cal, mat->walk_ior, mat->walk_roughness, v,
-		                      tv, albedo[c])
+		          ? gain_at(table + v * CAL_N, table + (v + 1) * CAL_N, tv,
+		                    albedo[c])
 		          : 1.0f;
 	return SSS_OK;
 }
@@ -862,7 +872,8 @@ float sss__shape_gain(int32_t calibration, float albedo, float x)
 	return g0 + tx * (g1 - g0);
 }
 
-void sss__calibration_apply(const sss_material *mat, const float fade[3],
+void sss__calibration_apply(const sss_material *mat, const float *table,
+                            const float fade[3],
                             float view_cosine, const float *shape,
                             const float *far, const float *diff_col,
                             float *light)
@@ -876,8 +887,8 @@ void sss__calibration_apply(const sss_material *mat, const float fade[3],
 		           ? s * mat->jimenez_strength[c] : s) * fade[c];
 		if (!(m > 0.0f))
 			continue;
-		float g = view_gain(mat->calibration, mat->walk_ior,
-		                    mat->walk_roughness, v, tv, diff_col[c]);
+		float g = gain_at(table + v * CAL_N, table + (v + 1) * CAL_N, tv,
+		                  diff_col[c]);
 		if (shape) {
 			/* The table was measured head-on; seen at an angle the
 			 * flat gain g(A, mu) already holds the walk's excess near a

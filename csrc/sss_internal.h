@@ -13,6 +13,10 @@
  * the centre, where Burley's 1/r and its marginal's log singularity live. */
 #define SSS__TABLE_SIZE 1024
 
+/* The energy calibration's gain table of one material: g at the measured
+ * view angles and albedos (sss_calibration.c), made once per material. */
+#define SSS__CAL_TABLE (7 * 16)
+
 /* A material turned into what the blur loops read: everything in scene
  * units (after unit_scale and radius_scale), tabulated once per call. */
 typedef struct sss__kernel {
@@ -22,6 +26,8 @@ typedef struct sss__kernel {
 	float calibration_fade[3]; /* 0..1 per channel: how much of the
 	                              energy calibration applies at this
 	                              radius (sss__calibration_fade) */
+	float calibration_gain[SSS__CAL_TABLE]; /* the material's gain table
+	                              (sss__calibration_table) */
 	float walk_radius[3]; /* scene units per channel: the radius Cycles'
 	                         walk sees (the calibration's shape term) */
 	int32_t texturing;   /* sss_texturing */
@@ -237,7 +243,10 @@ float sss__far_gain(int32_t calibration, float albedo, float x,
 /* shape_x: per channel, the surface's mean curvature x the radius the
  * walk sees (NULL: flat, or not followed); far_x: per channel, the
  * material's median of the same over its pixels (NULL: not read). */
-void sss__calibration_apply(const sss_material *mat, const float fade[3],
+void sss__calibration_table(const sss_material *mat,
+                            float table[SSS__CAL_TABLE]);
+void sss__calibration_apply(const sss_material *mat, const float *table,
+                            const float fade[3],
                             float view_cosine, const float *shape_x,
                             const float *far_x, const float *diff_col,
                             float *light);

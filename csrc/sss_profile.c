@@ -359,6 +359,7 @@ sss_result sss__kernel_build(const sss_material *mat, const sss_options *opt,
 		k->calibration_fade[c] = sss__calibration_fade(radius);
 		k->walk_radius[c] = (float)radius;
 	}
+	sss__calibration_table(mat, k->calibration_gain);
 	/* A profile too small for a double, or one that overflowed, does not
 	 * scatter: the identity is the right limit of the former, and the
 	 * latter was rejected by validation except through radius_scale. */

@@ -336,9 +336,11 @@ static void test_rise_and_fall(void)
 	float g[3];
 	sss_calibration_gain(&m, col, mu, g);
 	float up[3] = {1, 1, 1}, down[3] = {1, 1, 1}, flat[3] = {1, 1, 1};
-	sss__calibration_apply(&m, fade, mu, rise, NULL, col, up);
-	sss__calibration_apply(&m, fade, mu, fall, NULL, col, down);
-	sss__calibration_apply(&m, fade, mu, NULL, NULL, col, flat);
+	float table[SSS__CAL_TABLE];
+	sss__calibration_table(&m, table);
+	sss__calibration_apply(&m, table, fade, mu, rise, NULL, col, up);
+	sss__calibration_apply(&m, table, fade, mu, fall, NULL, col, down);
+	sss__calibration_apply(&m, table, fade, mu, NULL, NULL, col, flat);
 	for (int c = 0; c < 3; c++) {
 		float sr = sss__shape_gain(m.calibration, col[c], 1.0f);
 		float sf = sss__shape_gain(m.calibration, col[c], 100.0f);
