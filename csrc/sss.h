@@ -525,7 +525,8 @@ SSS_API sss_result sss_transmission_table(const sss_material *mat,
  * to the camera (1: head-on; measured to 85 degrees, held beyond): the
  * measured reflectance of the calibrated renderer over the plain diffuse
  * lobe's, on a flat surface (sss_apply also follows the surface's
- * curvature). NONE gives 1. */
+ * curvature). NONE gives 1. An invalid material (sss_material_validate)
+ * is SSS_ERR_INVALID_ARGUMENT. */
 SSS_API sss_result sss_calibration_gain(const sss_material *mat,
                                         const float albedo[3],
                                         float view_cosine, float gain[3]);

@@ -569,13 +569,10 @@ sss_result sss_calibration_gain(const sss_material *mat,
                                 const float albedo[3], float view_cosine,
                                 float gain[3])
 {
-	if (!mat || !albedo || !gain ||
-	    !(mat->walk_ior >= 1.0f && mat->walk_ior <= 3.8f) ||
-	    !(mat->walk_roughness >= 0.0f && mat->walk_roughness <= 1.0f))
+	/* the material's schema says what it may hold (sss_fields.h) */
+	if (!albedo || !gain || sss_material_validate(mat, NULL, 0))
 		return SSS_ERR_INVALID_ARGUMENT;
 	int32_t cal = mat->calibration;
-	if (cal != SSS_CALIBRATION_NONE && !is_calibration(cal))
-		return SSS_ERR_INVALID_ARGUMENT;
 	float tv, table[SSS__CAL_TABLE];
 	int v = view_rows(fabsf(view_cosine), &tv);
 	sss__calibration_table(mat, table);

@@ -45,6 +45,7 @@ static sss_result gain_of(int32_t cal, float ior, const float *albedo,
 {
 	sss_material m;
 	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
 	m.calibration = cal;
 	m.walk_ior = ior;
 	return sss_calibration_gain(&m, albedo, mu, g);
@@ -123,6 +124,7 @@ static void test_table(void)
 		                     1.0f, at));
 		sss_material m;
 		sss_material_default(&m, SSS_PROFILE_BURLEY);
+		m.pass_index = 1;
 		m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK;
 		m.walk_roughness = 1.5f;
 		CHECK_STATUS("bad-walk-roughness", SSS_ERR_INVALID_ARGUMENT,

@@ -329,12 +329,13 @@ static void test_rise_and_fall(void)
 {
 	sss_material m;
 	sss_material_default(&m, SSS_PROFILE_BURLEY);
+	m.pass_index = 1;
 	m.calibration = SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN;
 	const float fade[3] = {1, 1, 1}, col[3] = {0.3f, 0.5f, 0.8f};
 	const float rise[3] = {1, 1, 1}, fall[3] = {100, 100, 100};
 	const float mu = 0.6f;
 	float g[3];
-	sss_calibration_gain(&m, col, mu, g);
+	CHECK_STATUS("rise-gain", SSS_OK, sss_calibration_gain(&m, col, mu, g));
 	float up[3] = {1, 1, 1}, down[3] = {1, 1, 1}, flat[3] = {1, 1, 1};
 	float table[SSS__CAL_TABLE];
 	sss__calibration_table(&m, table);

@@ -243,21 +243,28 @@ WALK = {"BURLEY": ("cycles", None),
         "RANDOM_WALK_SKIN": ("cycles-random-walk", "cycles-random-walk")}
 
 
+def skin_entry(scene, tmp_path):
+    """The description the add-on writes for the scene: the Skin
+    material's entry, once the library has taken the file without a
+    warning."""
+    path = str(tmp_path / "scene.json")
+    found = pipeline.analyse(scene)
+    with pipeline.switched_off(scene, found, backlight=False):
+        pipeline.write_description(scene, found, path)
+    from separable_sss import native
+    with native.Scene(path) as loaded:
+        assert loaded.warnings == []
+    return [m for m in json.load(open(path))["materials"]
+            if m["name"] == "Skin"][0]
+
+
 @pytest.mark.parametrize("method", sorted(WALK))
 def test_description_follows_the_method(blends, tmp_path, method):
     scene = open_scene(blends["two"], tmp_path)
     node = bpy.data.materials["Skin"].node_tree.nodes["Principled BSDF"]
     compat.set_method(node, method)
-    path = str(tmp_path / "scene.json")
-    found = pipeline.analyse(scene)
-    with pipeline.switched_off(scene, found, backlight=False):
-        pipeline.write_description(scene, found, path)
-    skin = [m for m in json.load(open(path))["materials"]
-            if m["name"] == "Skin"][0]
+    skin = skin_entry(scene, tmp_path)
     assert (skin["mapping"], skin.get("calibration")) == WALK[method]
-    from separable_sss import native
-    with native.Scene(path) as loaded:      # and the library takes it
-        assert loaded.warnings == []
 
 
 # 4.x's plain Random Walk enters through the material's own surface, whose
@@ -276,17 +283,9 @@ def test_description_takes_the_walks_surface(blends, tmp_path, ior, level,
     compat.principled_input(node, "ior").default_value = ior
     compat.principled_input(node, "specular").default_value = level
     compat.principled_input(node, "roughness").default_value = 0.3
-    path = str(tmp_path / "scene.json")
-    found = pipeline.analyse(scene)
-    with pipeline.switched_off(scene, found, backlight=False):
-        pipeline.write_description(scene, found, path)
-    skin = [m for m in json.load(open(path))["materials"]
-            if m["name"] == "Skin"][0]
+    skin = skin_entry(scene, tmp_path)
     assert skin["walk_ior"] == pytest.approx(want, abs=1e-4)
     assert skin["walk_roughness"] == pytest.approx(0.3)
-    from separable_sss import native
-    with native.Scene(path) as loaded:
-        assert loaded.warnings == []
 
 
 def test_no_scattering_material(blends, tmp_path):
