@@ -38,7 +38,8 @@ crease: the box's top edge (a sharp 90-degree convex edge) seen at 45
   degrees (--crease-view: the angle between the camera's axis and the
   top face's normal; the front face is seen at 90 degrees less) by the
   orthographic camera, its front face under a sun at
-  normal incidence and its top face unlit (the sun grazes it): the random
+  normal incidence (--crease-sun: its rays leaning that many degrees
+  towards the edge) and its top face unlit (the sun grazes it): the random
   walk against the SSS-off render scattered by libsss with this Blender's
   measured mapping and calibration, without the crease term (scene
   "crease": 0), with it (1), and with the blur stopped at the edge but
@@ -124,6 +125,10 @@ def parse_args():
     p.add_argument("--crease-view", type=float, default=45.0,
                    help="crease: degrees between the camera's axis and the "
                    "unlit top face's normal")
+    p.add_argument("--crease-sun", type=float, default=0.0,
+                   help="crease: degrees the sun's rays lean from the lit "
+                   "front face's normal towards the edge (0 to 80; the top "
+                   "face stays unlit)")
     p.add_argument("--albedos", help="override: a,b,c;d,e,f")
     p.add_argument("--specular", type=float, default=compat.SPECULAR_OFF,
                    help="the Principled BSDF's Specular IOR Level (3.x: "
@@ -145,6 +150,8 @@ def parse_args():
         p.error(f"--view-angles: {e}")
     if not all(0.0 <= a < 90.0 for a in args.view_angles):
         p.error("--view-angles: each in [0, 90) degrees")
+    if not 0.0 <= args.crease_sun <= 80.0:
+        p.error(f"--crease-sun {args.crease_sun}: from 0 to 80 degrees")
     if not 5.0 <= args.crease_view <= 85.0:
         p.error(f"--crease-view {args.crease_view}: from 5 to 85 degrees "
                 "(both faces seen)")
@@ -608,7 +615,8 @@ def part_crease(args):
             edge_camera(scene, args.crease_view)
             _, mat = slab(scene)
             world(scene, 0.0)
-            sun(scene)
+            lean = math.radians(args.crease_sun)
+            sun(scene, (0.0, math.cos(lean), math.sin(lean)))
             setup_render(scene, args, None)
             rw, off, inp = walk_and_off(scene, mat, albedo, radius, args,
                                         "crease")
@@ -647,6 +655,7 @@ def part_crease(args):
                     rows.append(dict(method=args.method, radius=radius,
                                      albedo=albedo[c], d=bd[c],
                                      view=args.crease_view,
+                                     sun=args.crease_sun,
                                      t=float(t[i]),
                                      rw=float(prw[i, c] / lit[c]),
                                      ours=float(pours[i, c] / lit[c]),

@@ -4,17 +4,27 @@ trade at equal time against the denoised random walk, headless:
     blender -b --factory-startup --python-exit-code 1 \\
         --python blender_scripts/error_budget.py -- --scene SCENE.blend \\
         --out DIR [--name NAME] [--resolution 240x135] [--ref-samples 1024]
-        [--rw-samples 4,8,16,64] [--samples 16] [--cache DIR]
+        [--rw-samples 4,8,16,64] [--samples 16[,64]] [--seeds 1] [--cache DIR]
     blender -b --python blender_scripts/error_budget.py -- --summary DIR
 
 In one run: Cycles' random walk at --ref-samples (the reference: two
 renders of half as many samples with two other seeds, so that its noise can
 be taken out; kept in --cache and reused by later runs of the same scene,
 size and count), the random walk at each --rw-samples count, the render
-with material SSS off at --samples and our default method on its passes;
+with material SSS off at each --samples count (the budget is the first's)
+and our default method on its passes;
 every one of them but the reference denoised by Blender's Denoise node
 (OIDN, with the render's albedo and normal), as artists render. Times are
 wall times of the render, the library's scatter and the denoise.
+
+With --seeds N every run but the reference is rendered with N seeds (the
+scene's and the next ones, SEED_STEP apart) and each row's error is the
+root of the mean squared error over them, its time the mean: at 16
+samples one seed's error is a draw, not the method's (on the mixed scene
+ours + OIDN read 0.0117 - 0.0238 over eight seeds, the walk + OIDN
+0.0154 - 0.0264, and one specular highlight's noise held 28 % of ours'
+squared error at the first seed). budget.json keeps each seed's error
+(rmse_q_c_seeds); the budget averages the seeds' squared errors per block.
 
 The budget is of ours + OIDN at quarter resolution (compare_metrics: 4 x 4
 blocks at least 75 % scattering, where noise averages away and bias
@@ -72,6 +82,9 @@ CONVEX_EDGE_X = 2.0
 # A unit normal averaged over faces 30 degrees apart in equal parts is
 # 0.966 long; over one face 1.
 TWO_FACES_NORMAL = 0.97
+# Seeds of the runs, apart from each other and from the reference's
+# (compare_runs.REF_SEED_OFFSET, 7919 apart).
+SEED_STEP = 101
 
 
 def log(*a):
@@ -86,10 +99,16 @@ def parse_args():
     p.add_argument("--resolution", default="240x135")
     p.add_argument("--ref-samples", type=int, default=1024)
     p.add_argument("--rw-samples", default="4,8,16,64")
-    p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--samples", default="16",
+                   help="ours' (and the render without SSS's) counts, "
+                        "comma-separated; the budget is the first's")
     p.add_argument("--back-samples", type=int, default=0,
                    help="the back-light layer's samples for ours (0: the "
                         "scene's setting)")
+    p.add_argument("--seeds", type=int, default=1,
+                   help="render ours and the walk with this many seeds "
+                        "and pool their errors (the scene's seed and the "
+                        "next ones, SEED_STEP apart)")
     p.add_argument("--cache", help="where the reference renders are kept "
                    "(default: DIR/../cache)")
     p.add_argument("--summary", help="gather DIR/*/budget.json into "
@@ -103,8 +122,12 @@ def parse_args():
         w, _, h = args.resolution.partition("x")
         args.resolution = (int(w), int(h))
         args.rw_samples = sorted({int(x) for x in args.rw_samples.split(",")})
+        args.samples = list(dict.fromkeys(int(x) for x in
+                                          args.samples.split(",")))
     except ValueError as e:
         p.error(f"--resolution or --rw-samples: {e}")
+    if args.seeds < 1:
+        p.error(f"--seeds {args.seeds}: must be 1 or more")
     if args.back_samples < 0:
         p.error(f"--back-samples {args.back_samples}: must be 0 (the "
                 "scene's setting) or more")
@@ -165,32 +188,35 @@ def two_faces(normal, mask):
 
 def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x,
            plain=None, faces=None):
-    """The squared-error budget of ours against ref (see the module doc);
-    with plain (the render without SSS, denoised), each cause's RMSE of
+    """The squared-error budget of ours against ref (see the module doc):
+    ours, one image per seed, whose squared errors are averaged; with plain
+    (the render without SSS, denoised, per seed), each cause's RMSE of
     that render in the same blocks too (rmse_plain): what the blocks'
     error would be without scattering. faces: two_faces(), or None."""
     import compare_metrics as cm
     cover = down(mask.astype(np.float64)) >= cm.QUARTER_COVERAGE
-    qo, qr = down(ours), down(ref)
+    qos, qr = [down(o) for o in ours], down(ref)
     qa, qb = down(halves[0]), down(halves[1])
     noise = ((qa - qb) ** 2 / 4).sum(-1)          # per block, over RGB
     # the block's material: the most common scattering index in it
-    h4, w4 = qo.shape[:2]
+    h4, w4 = qr.shape[:2]
     ids = np.rint(idx[:h4 * 4, :w4 * 4]).reshape(h4, 4, w4, 4)
     ids = ids.transpose(0, 2, 1, 3).reshape(h4, w4, 16)
     block_id = np.array([[np.bincount(b.astype(np.int64)).argmax()
                           for b in row] for row in ids])
-    err = ((qo - qr) ** 2).sum(-1)
+    err = np.mean([((qo - qr) ** 2).sum(-1) for qo in qos], 0)
     total = float(err[cover].sum() - noise[cover].sum())
+    # one gain per material and channel over every seed's blocks
     gains = {}
-    fitted = qo.copy()
+    fitted = [qo.copy() for qo in qos]
     for m in np.unique(block_id[cover]):
         sel = cover & (block_id == m)
-        k = (qo[sel] * qr[sel]).sum(0) / np.maximum((qo[sel] ** 2).sum(0),
-                                                     1e-30)
+        k = sum((qo[sel] * qr[sel]).sum(0) for qo in qos) / np.maximum(
+            sum((qo[sel] ** 2).sum(0) for qo in qos), 1e-30)
         gains[int(m)] = [float(v) for v in k]
-        fitted[sel] = qo[sel] * k
-    err2 = ((fitted - qr) ** 2).sum(-1)
+        for f, qo in zip(fitted, qos):
+            f[sel] = qo[sel] * k
+    err2 = np.mean([((f - qr) ** 2).sum(-1) for f in fitted], 0)
     cal = float(err[cover].sum() - err2[cover].sum())
     edges = cm.silhouettes(idx, depth)
     qe = down(edges.astype(np.float64)) > 0
@@ -201,7 +227,7 @@ def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x,
     if faces is not None:
         sharp = sharp | faces
     qv = down(sharp.astype(np.float64)) > 0
-    cause = np.full(qo.shape[:2], len(CAUSES) - 1)
+    cause = np.full(qr.shape[:2], len(CAUSES) - 1)
     for i, sel in reversed(list(enumerate((qe, qt, qc, qv)))):
         cause[sel] = i
     cause[~cover] = -1
@@ -209,7 +235,8 @@ def budget(ours, ref, halves, mask, idx, depth, back_share, curv_x,
                                 blocks=float("nan"), rmse=float("nan"),
                                 gains=gains)}
     n_blocks = int(cover.sum())
-    perr = ((down(plain) - qr) ** 2).sum(-1) if plain is not None else None
+    perr = np.mean([((down(p) - qr) ** 2).sum(-1) for p in plain], 0) \
+        if plain is not None else None
     for i, name in enumerate(CAUSES):
         sel = cause == i
         se = float(err2[sel].sum() - noise[sel].sum())
@@ -248,13 +275,78 @@ def reference(args, scene):
     return halves
 
 
-def run(args):
+def render_seed(args, k, ref, halves):
+    """Ours, the render without SSS and the walk at each count, every one
+    denoised, with the scene's seed + k * SEED_STEP (k = 0: the scene's
+    own seed and file names without a suffix). Returns dict(images: what
+    -> (samples, image, seconds), ch: the passes read, found)."""
     import compare_runs as compare
     from separable_sss import native, pipeline
     from exr_io import read_exr, rgb
-    os.makedirs(args.out, exist_ok=True)
     work = os.path.join(args.out, "work")
-    os.makedirs(work, exist_ok=True)
+    tag = f"_s{k}" if k else ""
+    layer = bpy_layer_name()
+    scene = compare.open_scene(args, "CYCLES")
+    found = pipeline.analyse(scene)
+    scene.cycles.seed += k * SEED_STEP
+    seed = scene.cycles.seed     # the denoiser opens the file again
+    # Ours: SSS off, our default method (its SSS layer denoised below),
+    # at each count; the first is the budget's.
+    if args.back_samples > 0:
+        scene.sss.transmission_samples = args.back_samples
+    offs = []
+    for n in args.samples:
+        scene.cycles.samples = n
+        inp = os.path.join(work, f"off_{n}{tag}_passes.exr")
+        desc = os.path.join(work, f"off_{n}{tag}_scene.json")
+        out = os.path.join(work, f"off_{n}{tag}_sss.exr")
+        t0 = time.perf_counter()
+        compare.render_sss_off(scene, found, inp, desc)
+        render_s = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        with native.Scene(desc) as sc:
+            sc.process(inp, out)
+        post_s = time.perf_counter() - t0
+        offs.append((n, inp, out, render_s, post_s))
+    ch = read_exr(offs[0][1])
+    # The random walk at each count.
+    walks = []
+    for n in args.rw_samples:
+        scene.cycles.samples = n
+        path = os.path.join(work, f"rw_{n}{tag}.exr")
+        t0 = time.perf_counter()
+        compare.render(scene)
+        walks.append((n, path, time.perf_counter() - t0))
+        pipeline.save_passes(scene, path)
+    # OIDN on each, after every render (the denoiser opens the scene).
+    denoiser = compare.Denoiser(args)
+    images = {}
+    for n, inp, out, render_s, post_s in offs:
+        plain_dn, plain_dn_s = denoiser(inp, layer, "Combined")
+        ours_dn, ours_dn_s = denoiser(out, "SSS", "Combined")
+        images[("no SSS + OIDN", n)] = (plain_dn, render_s + plain_dn_s)
+        images[("ours", n)] = (rgb(read_exr(out), "SSS.Combined"),
+                               render_s + post_s)
+        images[("ours + OIDN", n)] = (ours_dn,
+                                      render_s + post_s + ours_dn_s)
+    for n, path, seconds in walks:
+        img, dn_s = denoiser(path, layer, "Combined")
+        images[("walk + OIDN", n)] = (img, seconds + dn_s)
+    mask = compare.scattering_pixels(ch, found)[0]
+    log(f"seed {seed}: " + ", ".join(
+        f"{what} at {n} spp "
+        f"{metrics(v[0], ref, mask, halves)['rmse_q_c']:.4f}"
+        for (what, n), v in images.items()
+        if what in ("ours + OIDN", "walk + OIDN") and n in args.samples))
+    return dict(images=images, ch=ch, found=found)
+
+
+def run(args):
+    import compare_runs as compare
+    from separable_sss import pipeline
+    from exr_io import rgb
+    os.makedirs(args.out, exist_ok=True)
+    os.makedirs(os.path.join(args.out, "work"), exist_ok=True)
     scene = compare.open_scene(args, "CYCLES")
     found = pipeline.analyse(scene)
     if not found.materials:
@@ -262,52 +354,19 @@ def run(args):
     halves = reference(args, scene)
     ref = (halves[0] + halves[1]) / 2
     layer = bpy_layer_name()
-
-    # Ours: SSS off, our default method (its SSS layer denoised below).
-    scene = compare.open_scene(args, "CYCLES")
-    found = pipeline.analyse(scene)
-    scene.cycles.samples = args.samples
-    if args.back_samples > 0:
-        scene.sss.transmission_samples = args.back_samples
-    inp = os.path.join(work, f"off_{args.samples}_passes.exr")
-    desc = os.path.join(work, f"off_{args.samples}_scene.json")
-    out = os.path.join(work, f"off_{args.samples}_sss.exr")
-    t0 = time.perf_counter()
-    compare.render_sss_off(scene, found, inp, desc)
-    render_s = time.perf_counter() - t0
-    ch = read_exr(inp)
+    # Every seed renders the same frame: the passes' geometry (mask,
+    # index, depth, normals) is the first seed's.
+    seeds = [render_seed(args, k, ref, halves) for k in range(args.seeds)]
+    ch, found = seeds[0]["ch"], seeds[0]["found"]
     mask, idx, depth = compare.scattering_pixels(ch, found)
-    t0 = time.perf_counter()
-    with native.Scene(desc) as sc:
-        sc.process(inp, out)
-    post_s = time.perf_counter() - t0
-    ours_raw = rgb(read_exr(out), "SSS.Combined")
-    # The random walk at each count.
-    walks = []
-    for n in args.rw_samples:
-        scene.cycles.samples = n
-        path = os.path.join(work, f"rw_{n}.exr")
-        t0 = time.perf_counter()
-        compare.render(scene)
-        walks.append((n, path, time.perf_counter() - t0))
-        pipeline.save_passes(scene, path)
-    # OIDN on each, after every render (the denoiser opens the scene).
-    denoiser = compare.Denoiser(args)
-    plain_dn, plain_dn_s = denoiser(inp, layer, "Combined")
-    ours_dn, ours_dn_s = denoiser(out, "SSS", "Combined")
-    rows = [dict(what="no SSS + OIDN", samples=args.samples,
-                 seconds=render_s + plain_dn_s,
-                 **metrics(plain_dn, ref, mask, halves)),
-            dict(what="ours", samples=args.samples, seconds=render_s + post_s,
-                 **metrics(ours_raw, ref, mask, halves)),
-            dict(what="ours + OIDN", samples=args.samples,
-                 seconds=render_s + post_s + ours_dn_s,
-                 **metrics(ours_dn, ref, mask, halves))]
-    for n, path, seconds in walks:
-        img, dn_s = denoiser(path, layer, "Combined")
-        rows.append(dict(what="walk + OIDN", samples=n,
-                         seconds=seconds + dn_s,
-                         **metrics(img, ref, mask, halves)))
+    rows = []
+    for key in seeds[0]["images"]:
+        each = [metrics(s["images"][key][0], ref, mask, halves)
+                for s in seeds]
+        rows.append(dict(
+            what=key[0], samples=key[1],
+            seconds=float(np.mean([s["images"][key][1] for s in seeds])),
+            **pool(each)))
     scene = compare.open_scene(args, "CYCLES")
 
     # The budget of ours + OIDN.
@@ -329,18 +388,34 @@ def run(args):
     if f"{layer}.Denoising Normal.X" in ch:
         faces = two_faces(np.stack([ch[f"{layer}.Denoising Normal.{c}"]
                                     for c in "XYZ"], -1), mask)
-    rows_b, cause, qerr = budget(ours_dn, ref, halves, mask, idx, depth,
-                                 back_share, curv_x, plain_dn, faces)
+    ours_key, plain_key = ("ours + OIDN", args.samples[0]), \
+        ("no SSS + OIDN", args.samples[0])
+    rows_b, cause, qerr = budget(
+        [s["images"][ours_key][0] for s in seeds], ref, halves, mask, idx,
+        depth, back_share, curv_x,
+        [s["images"][plain_key][0] for s in seeds], faces)
     result = dict(scene=args.name, resolution=list(args.resolution),
                   ref_samples=args.ref_samples, blender=blender_version(),
-                  runs=rows, budget=rows_b)
+                  seeds=args.seeds, runs=rows, budget=rows_b)
     with open(os.path.join(args.out, "budget.json"), "w") as f:
         json.dump(result, f, indent=1)
     with open(os.path.join(args.out, "budget.md"), "w") as f:
         f.write(markdown([result]))
-    picture(os.path.join(args.out, "errors.png"), ref, ours_dn, qerr, cause,
-            mask)
+    picture(os.path.join(args.out, "errors.png"), ref,
+            seeds[0]["images"][ours_key][0], qerr, cause, mask)
     log(markdown([result]))
+
+
+def pool(each):
+    """One row's metrics over seeds: the RMSEs as the root of the mean
+    squared error (each seed's is already the noise-free reference's), the
+    mean ratio averaged, and each seed's quarter-resolution RMSE."""
+    return dict(rmse_q_c=float(np.sqrt(np.mean([m["rmse_q_c"] ** 2
+                                                for m in each]))),
+                rmse_c=float(np.sqrt(np.mean([m["rmse_c"] ** 2
+                                              for m in each]))),
+                mean_ratio=float(np.mean([m["mean_ratio"] for m in each])),
+                rmse_q_c_seeds=[m["rmse_q_c"] for m in each])
 
 
 def bpy_layer_name():

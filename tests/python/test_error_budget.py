@@ -25,7 +25,7 @@ def frame(h=32, w=48):
 
 def split(ours, ref, idx, depth, mask, back=None, curv=None):
     flat = np.zeros(mask.shape)
-    rows, cause, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth,
+    rows, cause, _ = eb.budget([ours], ref, (ref, ref), mask, idx, depth,
                                flat if back is None else back,
                                flat if curv is None else curv)
     return rows, cause
@@ -96,11 +96,11 @@ def test_a_pixel_over_two_faces_marks_an_edge():
     ours[:, 20:24] += rng.normal(0, 0.05, (ref.shape[0], 4, 3))
     faces = eb.two_faces(normal, mask)
     assert faces.sum() == ref.shape[0] and faces[:, 21].all()
-    rows, cause, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth,
+    rows, cause, _ = eb.budget([ours], ref, (ref, ref), mask, idx, depth,
                                flat, flat, None, faces)
     assert rows["edges"]["share"] > 0.95
     assert (cause == eb.CAUSES.index("edges")).sum() == ref.shape[0] // 4
-    rows, _, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth, flat,
+    rows, _, _ = eb.budget([ours], ref, (ref, ref), mask, idx, depth, flat,
                            flat)
     assert rows["rest"]["share"] > 0.95
 
@@ -112,11 +112,32 @@ def test_the_render_without_sss_is_measured_in_the_same_blocks():
     ours[:, w // 2 - 1:w // 2 + 1] += 0.1
     plain = ours.copy()
     plain[:, :8] -= 0.2           # away from the silhouette
-    rows, _, _ = eb.budget(ours, ref, (ref, ref), mask, idx, depth, flat,
-                           flat, plain)
+    rows, _, _ = eb.budget([ours], ref, (ref, ref), mask, idx, depth, flat,
+                           flat, [plain])
     assert abs(rows["silhouettes"]["rmse_plain"] -
                rows["silhouettes"]["rmse"]) < 0.02
     assert rows["rest"]["rmse_plain"] > 0.05 > rows["rest"]["rmse"]
+
+
+def test_seeds_pool_their_squared_errors():
+    """Two seeds whose errors are +e and -e: the budget holds e^2 (not 0,
+    as their mean image would), the calibration none of it (one gain
+    cannot fit both), and each run's row the root of the mean square."""
+    ref, idx, depth, mask, flat = frame()
+    up, down = ref.copy(), ref.copy()
+    up[idx == 2] += 0.1
+    down[idx == 2] -= 0.1
+    rows, _, _ = eb.budget([up, down], ref, (ref, ref), mask, idx, depth,
+                           flat, flat)
+    n = (idx == 2).sum() / idx.size
+    assert abs(rows["total"]["rmse"] - 0.1 * np.sqrt(n)) < 1e-6
+    assert abs(rows["calibration"]["share"]) < 0.05  # a gain under 1 helps a little
+    pooled = eb.pool([dict(rmse_q_c=0.3, rmse_c=0.6, mean_ratio=1.1),
+                      dict(rmse_q_c=0.4, rmse_c=0.8, mean_ratio=0.9)])
+    assert abs(pooled["rmse_q_c"] - np.sqrt((0.09 + 0.16) / 2)) < 1e-12
+    assert abs(pooled["rmse_c"] - np.sqrt((0.36 + 0.64) / 2)) < 1e-12
+    assert abs(pooled["mean_ratio"] - 1.0) < 1e-12
+    assert pooled["rmse_q_c_seeds"] == [0.3, 0.4]
 
 
 def test_the_summary_says_up_to_what_time_ours_is_ahead():
