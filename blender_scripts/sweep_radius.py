@@ -1,6 +1,6 @@
 """Never worse than no SSS, from a vanishing radius to one far larger than
 the objects: one scene rendered with every scattering material's
-Subsurface (its radius) scaled by each of a range of factors, headless.
+Subsurface radius scaled by each of a range of factors, headless.
 
     blender -b --python-exit-code 1 --python blender_scripts/sweep_radius.py \\
         -- --scene SCENE.blend --out DIR [--scales 1e-6,1e-4,...,1e3]
@@ -93,9 +93,11 @@ def parse_args():
 
 
 def scale_subsurface(found, scale):
-    """Multiply the input that scales the radius of every scattering
-    material's Principled BSDF (Subsurface, or Subsurface Scale from 4.0)
-    by scale."""
+    """Multiply the scattering radius of every scattering material's
+    Principled BSDF by scale (blender_compat.scale_radius: Subsurface Scale
+    from 4.0, Subsurface Radius in 3.x, whose Subsurface is also the
+    diffuse / subsurface mix and, scaled past 1, made the walk's colour an
+    extrapolation)."""
     done = set()
     for f in found.materials:
         if f.material.name in done:
@@ -104,12 +106,11 @@ def scale_subsurface(found, scale):
         for node in f.material.node_tree.nodes:
             if node.type != "BSDF_PRINCIPLED":
                 continue
-            sock = compat.radius_factor_input(node)
-            if sock.is_linked:
-                raise RuntimeError(
-                    f"material {f.material.name!r}: {sock.name} is driven "
-                    "by a link; the sweep scales only a value")
-            sock.default_value *= scale
+            try:
+                compat.scale_radius(node, scale)
+            except ValueError as e:
+                raise RuntimeError(f"material {f.material.name!r}: {e}; "
+                                   "the sweep scales only a value") from None
 
 
 def one_scale(args, scale, default_code, work):

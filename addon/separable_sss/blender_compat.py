@@ -220,6 +220,22 @@ def radius_factor_input(node):
                             else "subsurface")
 
 
+def scale_radius(node, scale):
+    """Multiply the Principled BSDF's scattering radius by scale, leaving
+    what it mixes alone: Subsurface Scale from 4.0; in 3.x Subsurface Radius,
+    since Subsurface there is also the mix between diffuse and subsurface
+    (Cycles extrapolates the colours past 1: mix(Base Color, Subsurface
+    Color, Subsurface)). Raises ValueError when that input is linked."""
+    sock = principled_input(node, "subsurface_scale" if PRINCIPLED_V2
+                            else "subsurface_radius")
+    if sock.is_linked:
+        raise ValueError(f"{sock.name} is driven by a link")
+    if PRINCIPLED_V2:
+        sock.default_value *= scale
+    else:
+        sock.default_value = [v * scale for v in sock.default_value]
+
+
 def set_subsurface_factor(node, factor):
     """3.x's Subsurface factor on any version: from 4.0 Scale = factor and
     Weight = 1 (0 for factor 0), as Blender converts old files."""

@@ -239,3 +239,28 @@ def test_kernel_width_comes_from_the_camera_model(scene):
         (cam.type, cam.lens, cam.sensor_width, cam.sensor_fit,
          render.resolution_x, render.resolution_y,
          render.resolution_percentage, render.pixel_aspect_x) = saved
+
+
+def test_a_radius_scale_keeps_the_colour(scene):
+    """blender_compat.scale_radius (make sweep) scales the radius the
+    description reads and leaves its colour: in 3.x Subsurface is also the
+    diffuse / subsurface mix, which Cycles extrapolates past 1, so the
+    radius vector is scaled there instead."""
+    from separable_sss import blender_compat as compat
+    before = pipeline.analyse(scene).materials[0]
+    node = before.node
+    saved = [tuple(i.default_value) if hasattr(i.default_value, "__len__")
+             else i.default_value for i in node.inputs
+             if hasattr(i, "default_value")]
+    try:
+        compat.scale_radius(node, 300.0)
+        after = pipeline.analyse(scene).materials[0]
+        assert after.radius == pytest.approx(
+            [300.0 * r for r in before.radius], rel=1e-5)
+        assert after.albedo == pytest.approx(before.albedo, abs=1e-6)
+        assert all(0.0 <= a <= 1.0 for a in after.albedo)
+    finally:
+        values = iter(saved)
+        for i in node.inputs:
+            if hasattr(i, "default_value"):
+                i.default_value = next(values)
