@@ -2,12 +2,11 @@
 and one exposure for every image, with its error heat-map against the
 reference), the plot of error against time, and the trade at equal wall
 time of ours + OIDN against the denoised random walk (time.png)."""
-import textwrap
-
 import numpy as np
 
 from compare_metrics import crop_box
 from compare_report import equal_time, err
+from trade_plot import draw_time_plot
 
 
 def groups(bench):
@@ -114,39 +113,8 @@ def time_plot(bench, args, path):
     OIDN), log axes: the denoised random walk and ours + OIDN (default
     method) through their sample counts, the times where ours is ahead
     shaded, and the summary's line on it as the title."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     line, ours, walk, result = equal_time(bench, args)
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    drawn = []
-    for pts, style, label in (
-            (walk, "o-", "Cycles random walk + OIDN"),
-            (ours, "s-", f"SSS off + libsss ({bench.default_method}) "
-             "+ OIDN")):
-        pts = sorted(p for p in pts if p[1] > 0)
-        if not pts:
-            continue
-        drawn += pts
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], style,
-                label=label)
-        for t, e, n in pts:
-            ax.annotate(f"{n}", (t, e), fontsize=7, xytext=(3, 3),
-                        textcoords="offset points")
-    if drawn:
-        right = max(p[0] for p in drawn) * 1.5
-        for i, (a, b) in enumerate(result["intervals"]):
-            ax.axvspan(a, min(b, right), color="C1", alpha=0.12,
-                       label="ours + OIDN ahead" if i == 0 else None)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.legend(fontsize=8, loc="best")
-    ax.set_xlabel("wall time, s (render + SSS post-process + OIDN; "
-                  "labels: samples)")
-    ax.set_ylabel("RMSE at quarter resolution vs reference"
-                  + (" (its noise removed)" if bench.ref_halves else ""))
-    ax.set_title("\n".join(textwrap.wrap(line, 90)), fontsize=8)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    draw_time_plot(path, line, ours, walk, result,
+                   f"SSS off + libsss ({bench.default_method}) + OIDN",
+                   "RMSE at quarter resolution vs reference" +
+                   (" (its noise removed)" if bench.ref_halves else ""))

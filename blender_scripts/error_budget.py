@@ -55,11 +55,13 @@ than the error), the share of blocks, the RMSE there and the render
 without SSS's (denoised) in the same blocks: where the two are alike the
 error is not the scattering's.
 
-Writes DIR/budget.json, DIR/budget.md and DIR/errors.png (reference, ours
+Writes DIR/budget.json, DIR/budget.md, DIR/time.png (make compare's plot of
+the trade at equal time) and DIR/errors.png (reference, ours
 + OIDN, |error| at quarter resolution on one scale, the blocks' causes:
 red silhouettes, blue transmission, green crevices, yellow edges, grey
 the rest). With
---summary, DIR/summary.md gathers every DIR/*/budget.json.
+--summary, DIR/summary.md gathers every DIR/*/budget.json (and each
+scene's time.png is drawn again from it).
 """
 import argparse
 import glob
@@ -403,6 +405,7 @@ def run(args):
         f.write(markdown([result]))
     picture(os.path.join(args.out, "errors.png"), ref,
             seeds[0]["images"][ours_key][0], qerr, cause, mask)
+    time_plot(result, os.path.join(args.out, "time.png"))
     log(markdown([result]))
 
 
@@ -511,25 +514,46 @@ def markdown(results):
     return "\n".join(out) + "\n"
 
 
-def equal_time_line(result):
-    """Up to what wall time ours + OIDN is ahead of the denoised walk
+def trade(result):
+    """(line, ours, walk, equal_time's result) of a budget result: up to
+    what wall time ours + OIDN is ahead of the denoised walk
     (compare_metrics.equal_time, as make compare says it)."""
     import compare_metrics as cm
 
     def series(what):
         return [(x["seconds"], x["rmse_q_c"], x["samples"])
                 for x in result["runs"] if x["what"] == what]
-    walk = series("walk + OIDN")
-    return cm.equal_time_line(result["scene"], cm.equal_time(
-        series("ours + OIDN"), walk), walk)
+    ours, walk = series("ours + OIDN"), series("walk + OIDN")
+    ahead = cm.equal_time(ours, walk)
+    return cm.equal_time_line(result["scene"], ahead, walk), ours, walk, \
+        ahead
+
+
+def equal_time_line(result):
+    return trade(result)[0]
+
+
+def time_plot(result, path):
+    """The trade's plot (make compare's time.png) of a budget result."""
+    import trade_plot
+    line, ours, walk, ahead = trade(result)
+    seeds = result.get("seeds", 1)
+    trade_plot.draw_time_plot(
+        path, line, ours, walk, ahead,
+        "SSS off + libsss (default method) + OIDN" +
+        (f"; both over {seeds} seeds" if seeds > 1 else ""),
+        "RMSE at quarter resolution vs reference (its noise removed)")
 
 
 def summary(folder):
-    results = [json.load(open(p)) for p in
-               sorted(glob.glob(os.path.join(folder, "*", "budget.json")))]
+    paths = sorted(glob.glob(os.path.join(folder, "*", "budget.json")))
+    results = [json.load(open(p)) for p in paths]
     with open(os.path.join(folder, "summary.md"), "w") as f:
         f.write(markdown(results))
-    log(f"wrote {folder}/summary.md ({len(results)} scenes)")
+    for path, r in zip(paths, results):   # each scene's time.png again
+        time_plot(r, os.path.join(os.path.dirname(path), "time.png"))
+    log(f"wrote {folder}/summary.md and each scene's time.png "
+        f"({len(results)} scenes)")
 
 
 def main():

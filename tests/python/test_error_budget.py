@@ -154,3 +154,30 @@ def test_the_summary_says_up_to_what_time_ours_is_ahead():
     md = eb.markdown([dict(scene="head", runs=runs, budget=rows)])
     assert "\nhead: ours+OIDN ahead of walk+OIDN from 3.0 s up to 8.0 s " \
         "(walk needs 16 spp to match" in md
+
+
+def test_the_summary_draws_each_scenes_trade(tmp_path):
+    """--summary gathers every scene's budget.json into summary.md and
+    draws each scene's time.png (make compare's plot) from it."""
+    import json
+    runs = [dict(what="ours + OIDN", samples=16, seconds=1.0,
+                 rmse_q_c=0.02, rmse_c=0.03, mean_ratio=1.0),
+            dict(what="walk + OIDN", samples=4, seconds=0.5,
+                 rmse_q_c=0.05, rmse_c=0.06, mean_ratio=1.0),
+            dict(what="walk + OIDN", samples=16, seconds=1.5,
+                 rmse_q_c=0.03, rmse_c=0.04, mean_ratio=1.0),
+            dict(what="walk + OIDN", samples=64, seconds=5.0,
+                 rmse_q_c=0.01, rmse_c=0.02, mean_ratio=1.0)]
+    budget = {k: dict(share=0.2, blocks=0.2, rmse=0.01)
+              for k in eb.CAUSES + ("calibration", "total")}
+    scene = tmp_path / "out_folder_named_otherwise"
+    scene.mkdir()
+    (scene / "budget.json").write_text(json.dumps(dict(
+        scene="made", resolution=[8, 8], ref_samples=64, blender="x",
+        seeds=8, runs=runs, budget=budget)))
+    eb.summary(str(tmp_path))
+    text = (tmp_path / "summary.md").read_text()
+    assert "made: ours+OIDN ahead of walk+OIDN" in text
+    png = scene / "time.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert png.stat().st_size > 5000
