@@ -280,8 +280,9 @@ def reference(args, scene):
 def render_seed(args, k, ref, halves):
     """Ours, the render without SSS and the walk at each count, every one
     denoised, with the scene's seed + k * SEED_STEP (k = 0: the scene's
-    own seed and file names without a suffix). Returns dict(images: what
-    -> (samples, image, seconds), ch: the passes read, found)."""
+    own seed and file names without a suffix). Returns dict(images:
+    (what, samples) -> (image, seconds), ch: the first count's passes,
+    found)."""
     import compare_runs as compare
     from separable_sss import native, pipeline
     from exr_io import read_exr, rgb
