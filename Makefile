@@ -369,14 +369,14 @@ sweep: deps all $(filter $(BUILD)/%,$(SWEEP_BLENDER))
 # transmission, crevices, the rest), on every bundled scene with OIDN on
 # both sides, and ours + OIDN against the denoised random walk at equal
 # time (blender_scripts/error_budget.py): out/error_budget/SCENE/
-# {budget.md,budget.json,errors.png} and out/error_budget/summary.md. The
+# {budget.md,budget.json,errors.png,time.png} and out/error_budget/summary.md. The
 # reference renders (random walk, BUDGET_ARGS' --ref-samples, default
-# 1024) are kept in $(BUILD)/error_budget/ and reused. Ours (at 16 and 64
+# 1024) are kept in $(BUILD)/error_budget/ and reused. Ours (at 16, 32, 64
 # spp) and the walk are rendered with eight seeds and their squared errors
 # pooled: at 16 spp one seed's error is a draw (docs/comparison.md, over
 # seeds).
 BUDGET_SCENES ?= head marble mixed block sphere
-BUDGET_ARGS ?= --seeds 8 --samples 16,64
+BUDGET_ARGS ?= --seeds 8 --samples 16,32,64
 BUDGET_BLENDER ?= $(word 1,$(BPY_BLENDERS))
 error-budget: deps all $(filter $(BUILD)/%,$(BUDGET_BLENDER))
 	@mkdir -p out/error_budget $(BUILD)/error_budget
