@@ -25,6 +25,7 @@ ours + OIDN read 0.0117 - 0.0238 over eight seeds, the walk + OIDN
 0.0154 - 0.0264, and one specular highlight's noise held 28 % of ours'
 squared error at the first seed). budget.json keeps each seed's error
 (rmse_q_c_seeds); the budget averages the seeds' squared errors per block.
+Only the first seed's renders stay in DIR/work.
 
 The budget is of ours + OIDN at quarter resolution (compare_metrics: 4 x 4
 blocks at least 75 % scattering, where noise averages away and bias
@@ -335,6 +336,20 @@ def render_seed(args, k, ref, halves):
     for n, path, seconds in walks:
         img, dn_s = denoiser(path, layer, "Combined")
         images[("walk + OIDN", n)] = (img, seconds + dn_s)
+    if k:
+        # Only the first seed's files stay in DIR/work (the budget's map
+        # is made from them); the others' would be about 17 MB a seed
+        # at 240x135.
+        written = [p for _, inp, out, _, _ in offs
+                   for p in (inp, out, inp.replace(".exr", ".json")
+                             .replace("_passes", "_scene"))]
+        written += [path for _, path, _ in walks]
+        for path in written:      # and what the denoiser wrote beside
+            for p in {path, path.replace(".exr", "_oidn.exr")}:
+                try:
+                    os.remove(p)
+                except FileNotFoundError:
+                    pass
     mask = compare.scattering_pixels(ch, found)[0]
     log(f"seed {seed}: " + ", ".join(
         f"{what} at {n} spp "
