@@ -128,7 +128,7 @@ def parse_args():
         args.samples = list(dict.fromkeys(int(x) for x in
                                           args.samples.split(",")))
     except ValueError as e:
-        p.error(f"--resolution or --rw-samples: {e}")
+        p.error(f"--resolution, --rw-samples or --samples: {e}")
     if args.seeds < 1:
         p.error(f"--seeds {args.seeds}: must be 1 or more")
     if args.back_samples < 0:
