@@ -57,17 +57,24 @@ sss_result sss__auto_methods(const sss_image *depth, const int16_t *slot,
 	x_at = malloc((start[count] ? start[count] : 1) * sizeof *x_at);
 	if (!x_at)
 		goto done;
-	for (int32_t y = 0; y < h; y++)
-		for (int32_t x = 0; x < w; x++) {
-			int16_t m = slot[(size_t)y * w + x];
-			if (m < 0 || x % step[m] || y % step[m])
-				continue;
-			const float *rad = kernels[m].walk_radius;
-			double rho = fmax(rad[0], fmax(rad[1], rad[2]));
-			double H = sss__mean_curvature(depth, slot, proj, w, h, x, y,
-			                               rho);
-			x_at[start[m] + filled[m]++] = (float)(H > 0.0 ? rho * H : 0.0);
-		}
+	/* Each material's own grid, in raster order: only its points are
+	 * visited (a scan of every pixel with a division each cost more than
+	 * the probes). */
+	for (int32_t m = 0; m < count; m++) {
+		if (!pixels[m])
+			continue;
+		const float *rad = kernels[m].walk_radius;
+		double rho = fmax(rad[0], fmax(rad[1], rad[2]));
+		for (int32_t y = 0; y < h; y += step[m])
+			for (int32_t x = 0; x < w; x += step[m]) {
+				if (slot[(size_t)y * w + x] != m)
+					continue;
+				double H = sss__mean_curvature(depth, slot, proj, w, h, x,
+				                               y, rho);
+				x_at[start[m] + filled[m]++] =
+					(float)(H > 0.0 ? rho * H : 0.0);
+			}
+	}
 	for (int32_t m = 0; m < count; m++) {
 		float *v = x_at + start[m];
 		size_t n = filled[m];
