@@ -4,6 +4,7 @@
 #include "sss_internal.h"
 #include "sss_transmission.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -104,6 +105,10 @@ typedef struct rows_ctx {
 	const float *rest;   /* the frame's sss__rest_light, or NULL */
 	float *view;         /* the view cosine of every scattering pixel
 	                        (view_plane), or NULL: made pixel by pixel */
+	float *glow;         /* the transmitted light each pixel sends out,
+	                        3 a pixel (sss_glow.c), or NULL */
+	const sss__glow *glow_in; /* what facing parts send it, or NULL */
+	atomic_int *glow_failed;  /* glow_rows could not allocate a row */
 } rows_ctx;
 
 /* Which pixels scatter, and the signal: L, or L sqrt(DiffCol) for
@@ -264,6 +269,7 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				}
 				light[c] = l;
 			}
+			float sent[3] = {0.0f, 0.0f, 0.0f};
 			if (slot[i] >= 0 && ctx->transmission) {
 				/* back-lit light, after the blur: it crossed the part
 				 * and spread over its thickness, not over the radius
@@ -271,8 +277,10 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				float t[3] = {0.0f, 0.0f, 0.0f};
 				sss__transmission_add(ctx->transmission, slot[i], x, y, t);
 				for (int c = 0; c < 3; c++)
-					if (kernels[slot[i]].mix[c] > 0.0f)
+					if (kernels[slot[i]].mix[c] > 0.0f) {
 						light[c] += t[c];
+						sent[c] = t[c];
+					}
 			}
 			if (slot[i] >= 0) { /* energy calibration, at the exit
 			                       pixel's colour and view
@@ -309,13 +317,24 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 					for (int c = 0; c < 3; c++)
 						shape[c] = H * r[c];
 				}
-				sss__calibration_apply(m,
-				                       kernels[slot[i]].calibration_gain,
-				                       fade, mu, shaped ? shape : NULL,
-				                       whole ? far : NULL, col, light);
+				float gain[3];
+				sss__calibration_factors(m,
+				                         kernels[slot[i]].calibration_gain,
+				                         fade, mu, shaped ? shape : NULL,
+				                         whole ? far : NULL, col, gain);
+				for (int c = 0; c < 3; c++) {
+					light[c] *= gain[c];
+					sent[c] *= gain[c]; /* the transmitted part as it
+					                       leaves */
+				}
 				if (ctx->crease)
 					add_crease(ctx, i, mu, col, light);
 			}
+			if (ctx->glow && slot[i] >= 0) /* read only on slots that
+			                                  transmit */
+				for (int c = 0; c < 3; c++)
+					ctx->glow[3 * i + c] = isfinite(sent[c]) && sent[c] > 0.0f
+					                       ? sent[c] * col[c] : 0.0f;
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
 				           y * sss__stride(out_diffuse_light) +
@@ -338,6 +357,43 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 			}
 		}
 	}
+}
+
+/* The glow that facing parts of a back-lit material send each other
+ * (sss_glow.c), added to the outputs' diffuse light. */
+static void glow_rows(void *vctx, int32_t y0, int32_t y1)
+{
+	const rows_ctx *ctx = vctx;
+	const sss_passes *p = ctx->p;
+	float *row = malloc((size_t)ctx->w * 3 * sizeof *row);
+	if (!row) {
+		atomic_store(ctx->glow_failed, 1);
+		return;
+	}
+	for (int32_t y = y0; y < y1; y++) {
+		sss__glow_row(ctx->glow_in, y, ctx->slot + (size_t)y * ctx->w, row);
+		for (int32_t x = 0; x < ctx->w; x++) {
+			const float *g = row + 3 * x;
+			if (!(g[0] > 0.0f || g[1] > 0.0f || g[2] > 0.0f))
+				continue;
+			const float *col = sss__at(&p->diff_col, x, y);
+			if (ctx->out_diffuse_light) {
+				float *o = ctx->out_diffuse_light->data +
+				           y * sss__stride(ctx->out_diffuse_light) +
+				           (int64_t)x * ctx->out_diffuse_light->channels;
+				for (int c = 0; c < 3; c++)
+					o[c] += g[c];
+			}
+			if (ctx->out_combined) {
+				float *o = ctx->out_combined->data +
+				           y * sss__stride(ctx->out_combined) +
+				           (int64_t)x * ctx->out_combined->channels;
+				for (int c = 0; c < 3; c++)
+					o[c] += g[c] * col[c];
+			}
+		}
+	}
+	free(row);
 }
 
 static void view_rows(void *vctx, int32_t y0, int32_t y1)
@@ -800,7 +856,47 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
 		goto done;
 	}
+	/* Back-lit parts that face each other light each other with their
+	 * glow (sss_glow.c). */
+	float *glow = NULL;
+	uint8_t *receives = NULL;
+	if (transmission && material_count > 0) {
+		receives = calloc((size_t)material_count, 1);
+		int any = 0;
+		for (int32_t m = 0; receives && m < material_count; m++)
+			any |= receives[m] = kernels[m].support > 0.0 &&
+			                     sss__transmission_active(transmission, m);
+		if (any)
+			glow = sss__ws_get(ws, SSS__WS_GLOW, npix * 3 * sizeof *glow, 0);
+		if (!receives || (any && !glow)) {
+			free(receives);
+			r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working "
+			          "memory for a %dx%d image", w, h);
+			goto done;
+		}
+	}
+	rc.glow = glow;
 	sss__parallel_rows(h, opt.num_threads, composite_rows, &rc);
+	if (glow) {
+		sss__glow *bounce = NULL;
+		r = sss__glow_make(glow, &p->depth, slot, receives, &job.proj, w, h,
+		                   opt.num_threads, &bounce);
+		if (!r) {
+			atomic_int failed = 0;
+			rc.glow_in = bounce;
+			rc.glow_failed = &failed;
+			sss__parallel_rows(h, opt.num_threads, glow_rows, &rc);
+			if (atomic_load(&failed))
+				r = SSS_ERR_OUT_OF_MEMORY;
+		}
+		sss__glow_free(bounce);
+	}
+	free(receives);
+	sss__ws_put(ws, glow);
+	if (r) {
+		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
+		goto done;
+	}
 	if (chosen)
 		for (int32_t m = 0; m < material_count; m++)
 			chosen[m] = by_index[materials[m].pass_index] == m

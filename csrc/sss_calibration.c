@@ -875,6 +875,19 @@ void sss__calibration_apply(const sss_material *mat, const float *table,
                             const float *far, const float *diff_col,
                             float *light)
 {
+	float f[3];
+	sss__calibration_factors(mat, table, fade, view_cosine, shape, far,
+	                         diff_col, f);
+	for (int c = 0; c < 3; c++)
+		light[c] *= f[c];
+}
+
+void sss__calibration_factors(const sss_material *mat, const float *table,
+                              const float fade[3], float view_cosine,
+                              const float *shape, const float *far,
+                              const float *diff_col, float factor[3])
+{
+	factor[0] = factor[1] = factor[2] = 1.0f;
 	if (!is_calibration(mat->calibration))
 		return;
 	float s = mat->strength, tv;
@@ -907,7 +920,7 @@ void sss__calibration_apply(const sss_material *mat, const float *table,
 			                  : 1.0f;
 			g *= (1.0f - w) * local + w * whole;
 		}
-		light[c] *= 1.0f + m * (g - 1.0f);
+		factor[c] = 1.0f + m * (g - 1.0f);
 	}
 }
 

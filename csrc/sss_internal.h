@@ -67,6 +67,7 @@ enum {
 	SSS__WS_VIEW_KEY,  /* sss_apply: and the camera */
 	SSS__WS_PLANE_SLOT, /* separable: the slot map its planes hold */
 	SSS__WS_BREAKS,    /* sss_apply: where creases part the faces */
+	SSS__WS_GLOW,      /* sss_apply: the transmitted light sent out */
 	SSS__WS_BLOCKS
 };
 sss__workspace *sss__workspace_new(void);
@@ -250,6 +251,12 @@ void sss__calibration_apply(const sss_material *mat, const float *table,
                             float view_cosine, const float *shape_x,
                             const float *far_x, const float *diff_col,
                             float *light);
+/* The factors sss__calibration_apply multiplies light by (1 where the
+ * material is not calibrated). */
+void sss__calibration_factors(const sss_material *mat, const float *table,
+                              const float fade[3], float view_cosine,
+                              const float *shape_x, const float *far_x,
+                              const float *diff_col, float factor[3]);
 
 /* The mean curvature (1 / scene units, positive where convex) of the
  * visible surface at pixel (x, y), averaged over about rho scene units
@@ -258,6 +265,21 @@ void sss__calibration_apply(const sss_material *mat, const float *table,
 double sss__mean_curvature(const sss_image *depth, const int16_t *slot,
                            const sss__projection *p, int32_t w, int32_t h,
                            int32_t x, int32_t y, double rho);
+
+/* One bounce of the transmitted light between facing visible parts of a
+ * material (sss_glow.c): glow (w x h x 3) is the light each pixel sends
+ * out through transmission (DiffCol applied), receives[slot] which slots
+ * take part. sss__glow_row gives, for each pixel of row y, the light to
+ * add to its diffuse light (times DiffCol in the image); glow may be
+ * reused once made. */
+typedef struct sss__glow sss__glow;
+sss_result sss__glow_make(const float *glow, const sss_image *depth,
+                          const int16_t *slot, const uint8_t *receives,
+                          const sss__projection *proj, int32_t w, int32_t h,
+                          int32_t num_threads, sss__glow **out);
+void sss__glow_row(const sss__glow *g, int32_t y, const int16_t *slot_row,
+                   float *out /* width x 3, 0 where nothing comes */);
+void sss__glow_free(sss__glow *g); /* NULL is fine */
 
 /* Camera (sss_camera.c). */
 sss_result sss__projection_make(const sss_camera *cam, int32_t width,
