@@ -105,8 +105,8 @@ typedef struct rows_ctx {
 	const float *rest;   /* the frame's sss__rest_light, or NULL */
 	float *view;         /* the view cosine of every scattering pixel
 	                        (view_plane), or NULL: made pixel by pixel */
-	float *glow;         /* the transmitted light each pixel sends out,
-	                        3 a pixel (sss_glow.c), or NULL */
+	float *glow;         /* the transmitted light the glow's grid points
+	                        send out, 3 a point (sss_glow.c), or NULL */
 	const sss__glow *glow_in; /* what facing parts send it, or NULL */
 	atomic_int *glow_failed;  /* glow_rows could not allocate a row */
 } rows_ctx;
@@ -330,11 +330,11 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				if (ctx->crease)
 					add_crease(ctx, i, mu, col, light);
 			}
-			if (ctx->glow && slot[i] >= 0) /* read only on slots that
-			                                  transmit */
-				for (int c = 0; c < 3; c++)
-					ctx->glow[3 * i + c] = isfinite(sent[c]) && sent[c] > 0.0f
-					                       ? sent[c] * col[c] : 0.0f;
+			int64_t g = ctx->glow && slot[i] >= 0
+			            ? sss__glow_point_of(w, ctx->h, x, y) : -1;
+			for (int c = 0; g >= 0 && c < 3; c++)
+				ctx->glow[3 * g + c] = isfinite(sent[c]) && sent[c] > 0.0f
+				                       ? sent[c] * col[c] : 0.0f;
 			if (out_diffuse_light) {
 				float *o = out_diffuse_light->data +
 				           y * sss__stride(out_diffuse_light) +
@@ -866,8 +866,8 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		for (int32_t m = 0; receives && m < material_count; m++)
 			any |= receives[m] = kernels[m].support > 0.0 &&
 			                     sss__transmission_active(transmission, m);
-		if (any)
-			glow = sss__ws_get(ws, SSS__WS_GLOW, npix * 3 * sizeof *glow, 0);
+		if (any) /* zeros where no grid point's pixel scatters */
+			glow = calloc((size_t)sss__glow_points(w, h) * 3, sizeof *glow);
 		if (!receives || (any && !glow)) {
 			free(receives);
 			r = FAILX(SSS_ERR_OUT_OF_MEMORY, "cannot allocate working "
@@ -892,7 +892,7 @@ sss_result sss__apply_report(const sss_passes *p, const sss_camera *cam,
 		sss__glow_free(bounce);
 	}
 	free(receives);
-	sss__ws_put(ws, glow);
+	free(glow);
 	if (r) {
 		FAILX(r, "cannot allocate working memory for a %dx%d image", w, h);
 		goto done;

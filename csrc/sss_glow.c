@@ -24,7 +24,7 @@
  * a nearly flat surface does not blow up). The receiver reflects E / pi
  * times its DiffCol, as diffuse light. Points sample a grid of at most
  * GLOW_GRID columns (every pixel up to that width), each standing for its
- * cell's pixels. The points of the 3 x 3 cells of GLOW_CELL^2 points
+ * cell's pixels of its slot with the glow of its own pixel. The points of the 3 x 3 cells of GLOW_CELL^2 points
  * around a point's own cell count one by one; the cells beyond, through
  * their sums, as one vector per channel at the middle of the point's cell
  * (the cup's far side: within 8 points the bundled head lost nothing, a
@@ -48,11 +48,11 @@ typedef struct point {
 	float nrm[3];  /* towards the camera; 0 when not told */
 	float area;    /* surface area the point stands for */
 	float r_min2;  /* squared nearest distance counted */
-	float glow[3]; /* mean G over its cell's pixels of its slot */
+	float glow[3]; /* G at the point's pixel */
 } point;
 
 typedef struct glow_ctx {
-	const float *glow;   /* w x h x 3 */
+	const float *glow;   /* G at the grid points, gw x gh x 3 */
 	const sss_image *depth;
 	const int16_t *slot;
 	const sss__projection *proj;
@@ -83,14 +83,41 @@ static float depth_at(const glow_ctx *c, int32_t x, int32_t y)
 	return sss__at(c->depth, x, y)[0];
 }
 
+/* Pixels between grid points for an image w pixels wide. */
+static int32_t grid_step(int32_t w)
+{
+	int32_t step = (w + GLOW_GRID - 1) / GLOW_GRID;
+	return step > 1 ? step : 1;
+}
+
 /* The grid point (i, j) sits at pixel (i step + step / 2, ...), clamped
  * into the image. */
+static int32_t grid_coord(int32_t i, int32_t step, int32_t len)
+{
+	int32_t p = i * step + step / 2;
+	return p < len ? p : len - 1;
+}
+
 static void grid_pixel(const glow_ctx *c, int32_t i, int32_t j, int32_t *x,
                        int32_t *y)
 {
-	int32_t px = i * c->step + c->step / 2, py = j * c->step + c->step / 2;
-	*x = px < c->w ? px : c->w - 1;
-	*y = py < c->h ? py : c->h - 1;
+	*x = grid_coord(i, c->step, c->w);
+	*y = grid_coord(j, c->step, c->h);
+}
+
+int64_t sss__glow_points(int32_t w, int32_t h)
+{
+	int32_t step = grid_step(w);
+	return (int64_t)((w + step - 1) / step) * ((h + step - 1) / step);
+}
+
+int64_t sss__glow_point_of(int32_t w, int32_t h, int32_t x, int32_t y)
+{
+	int32_t step = grid_step(w), gw = (w + step - 1) / step;
+	int32_t i = x / step, j = y / step;
+	if (grid_coord(i, step, w) != x || grid_coord(j, step, h) != y)
+		return -1;
+	return (int64_t)j * gw + i;
 }
 
 static void view_point(const glow_ctx *c, int32_t x, int32_t y, float out[3])
@@ -168,21 +195,14 @@ static void points_rows(void *vctx, int32_t j0, int32_t j1)
 			if (pt->nrm[0] == 0.0f && pt->nrm[1] == 0.0f &&
 			    pt->nrm[2] == 0.0f)
 				continue;
-			/* the cell's pixels of this slot and their mean glow */
-			double g[3] = {0.0, 0.0, 0.0};
+			/* the cell's pixels of this slot: the area it stands for */
 			int32_t n = 0;
 			int32_t xa = i * c->step, ya = j * c->step;
 			int32_t xb = xa + c->step < c->w ? xa + c->step : c->w;
 			int32_t yb = ya + c->step < c->h ? ya + c->step : c->h;
 			for (int32_t yy = ya; yy < yb; yy++)
-				for (int32_t xx = xa; xx < xb; xx++) {
-					size_t k = (size_t)yy * c->w + xx;
-					if (c->slot[k] != s)
-						continue;
-					for (int ch = 0; ch < 3; ch++)
-						g[ch] += c->glow[3 * k + ch];
-					n++;
-				}
+				for (int32_t xx = xa; xx < xb; xx++)
+					n += c->slot[(size_t)yy * c->w + xx] == s;
 			double px_x = c->proj->ortho ? 1.0 / c->proj->fx : z / c->proj->fx;
 			double px_y = c->proj->ortho ? 1.0 / c->proj->fy : z / c->proj->fy;
 			float len = c->proj->ortho ? 1.0f
@@ -198,7 +218,7 @@ static void points_rows(void *vctx, int32_t j0, int32_t j1)
 			double step = 1.5 * c->step * (px_x > px_y ? px_x : px_y);
 			pt->r_min2 = (float)(step * step);
 			for (int ch = 0; ch < 3; ch++) {
-				float v = n ? (float)(g[ch] / n) : 0.0f;
+				float v = c->glow[3 * ((size_t)j * c->gw + i) + ch];
 				pt->glow[ch] = isfinite(v) && v > 0.0f ? v : 0.0f;
 			}
 			pt->slot = s;
@@ -206,8 +226,8 @@ static void points_rows(void *vctx, int32_t j0, int32_t j1)
 }
 
 /* d = to - from, its squared length and length; 0 when they coincide. */
-static int separation(const float from[3], const float to[3], float d[3],
-                      float *r2, float *r)
+static inline int separation(const float from[3], const float to[3],
+                             float d[3], float *r2, float *r)
 {
 	for (int a = 0; a < 3; a++)
 		d[a] = to[a] - from[a];
@@ -351,9 +371,7 @@ sss_result sss__glow_make(const float *glow, const sss_image *depth,
 	glow_ctx *c = &g->c;
 	*c = (glow_ctx){glow, depth, slot, proj, receives, w, h, 1, 0, 0, NULL,
 	                NULL, 0, 0, NULL, NULL, 0};
-	c->step = (w + GLOW_GRID - 1) / GLOW_GRID;
-	if (c->step < 1)
-		c->step = 1;
+	c->step = grid_step(w);
 	c->gw = (w + c->step - 1) / c->step;
 	c->gh = (h + c->step - 1) / c->step;
 	size_t n = (size_t)c->gw * c->gh;

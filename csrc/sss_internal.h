@@ -67,7 +67,6 @@ enum {
 	SSS__WS_VIEW_KEY,  /* sss_apply: and the camera */
 	SSS__WS_PLANE_SLOT, /* separable: the slot map its planes hold */
 	SSS__WS_BREAKS,    /* sss_apply: where creases part the faces */
-	SSS__WS_GLOW,      /* sss_apply: the transmitted light sent out */
 	SSS__WS_BLOCKS
 };
 sss__workspace *sss__workspace_new(void);
@@ -267,12 +266,16 @@ double sss__mean_curvature(const sss_image *depth, const int16_t *slot,
                            int32_t x, int32_t y, double rho);
 
 /* One bounce of the transmitted light between facing visible parts of a
- * material (sss_glow.c): glow (w x h x 3) is the light each pixel sends
- * out through transmission (DiffCol applied), receives[slot] which slots
- * take part. sss__glow_row gives, for each pixel of row y, the light to
+ * material (sss_glow.c), on a grid of sss__glow_points(w, h) points:
+ * glow (3 a point) is the light the point's pixel sends out through
+ * transmission (DiffCol applied; sss__glow_point_of says which pixel is
+ * which point, -1 for the others), receives[slot] which slots take
+ * part. sss__glow_row gives, for each pixel of row y, the light to
  * add to its diffuse light (times DiffCol in the image); glow may be
  * reused once made. */
 typedef struct sss__glow sss__glow;
+int64_t sss__glow_points(int32_t w, int32_t h);
+int64_t sss__glow_point_of(int32_t w, int32_t h, int32_t x, int32_t y);
 sss_result sss__glow_make(const float *glow, const sss_image *depth,
                           const int16_t *slot, const uint8_t *receives,
                           const sss__projection *proj, int32_t w, int32_t h,

@@ -44,7 +44,7 @@ static void frame_make(frame *f, enum surface s, int n, int16_t (*slot_of)(
 {
 	f->n = n;
 	f->depth = calloc((size_t)n * n, sizeof *f->depth);
-	f->glow = calloc((size_t)n * n * 3, sizeof *f->glow);
+	f->glow = calloc((size_t)sss__glow_points(n, n) * 3, sizeof *f->glow);
 	f->out = calloc((size_t)n * 3, sizeof *f->out);
 	f->slot = malloc((size_t)n * n * sizeof *f->slot);
 	for (int y = 0; y < n; y++)
@@ -53,8 +53,9 @@ static void frame_make(frame *f, enum surface s, int n, int16_t (*slot_of)(
 			double z = depth_at(s, x, y, n);
 			f->depth[i] = (float)z;
 			f->slot[i] = z > 0.0 ? (slot_of ? slot_of(x, y) : 0) : -1;
-			for (int c = 0; c < 3; c++)
-				f->glow[3 * i + c] = f->slot[i] >= 0 ? 1.0f + c : 0.0f;
+			int64_t g = sss__glow_point_of(n, n, x, y);
+			for (int c = 0; g >= 0 && c < 3; c++)
+				f->glow[3 * g + c] = f->slot[i] >= 0 ? 1.0f + c : 0.0f;
 		}
 	f->dimg = (sss_image){f->depth, n, n, 1, 0};
 	f->proj = (sss__projection){1, n / 2.4, n / 2.4, n / 2.0, n / 2.0};
