@@ -248,6 +248,8 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 	const sss_image *out_diffuse_light = ctx->out_diffuse_light;
 	int32_t w = ctx->w;
 	for (int32_t y = y0; y < y1; y++) {
+		/* rows without grid points of the glow skip its test */
+		int glow_row = ctx->glow && sss__glow_on_row(w, ctx->h, y);
 		for (int32_t x = 0; x < w; x++) {
 			size_t i = (size_t)y * w + x;
 			const float *dd = sss__at(&p->diff_dir, x, y);
@@ -330,7 +332,7 @@ static void composite_rows(void *vctx, int32_t y0, int32_t y1)
 				if (ctx->crease)
 					add_crease(ctx, i, mu, col, light);
 			}
-			int64_t g = ctx->glow && slot[i] >= 0
+			int64_t g = glow_row && slot[i] >= 0
 			            ? sss__glow_point_of(w, ctx->h, x, y) : -1;
 			for (int c = 0; g >= 0 && c < 3; c++)
 				ctx->glow[3 * g + c] = isfinite(sent[c]) && sent[c] > 0.0f

@@ -111,6 +111,12 @@ int64_t sss__glow_points(int32_t w, int32_t h)
 	return (int64_t)((w + step - 1) / step) * ((h + step - 1) / step);
 }
 
+int sss__glow_on_row(int32_t w, int32_t h, int32_t y)
+{
+	int32_t step = grid_step(w);
+	return grid_coord(y / step, step, h) == y;
+}
+
 int64_t sss__glow_point_of(int32_t w, int32_t h, int32_t x, int32_t y)
 {
 	int32_t step = grid_step(w), gw = (w + step - 1) / step;

@@ -276,6 +276,7 @@ double sss__mean_curvature(const sss_image *depth, const int16_t *slot,
 typedef struct sss__glow sss__glow;
 int64_t sss__glow_points(int32_t w, int32_t h);
 int64_t sss__glow_point_of(int32_t w, int32_t h, int32_t x, int32_t y);
+int sss__glow_on_row(int32_t w, int32_t h, int32_t y); /* any point there */
 sss_result sss__glow_make(const float *glow, const sss_image *depth,
                           const int16_t *slot, const uint8_t *receives,
                           const sss__projection *proj, int32_t w, int32_t h,
