@@ -156,8 +156,9 @@ SSS_API sss_result sss_render_pass(int32_t i, sss_pass_info *info);
 /* Names the add-on and sss_process_exr use in Blender's multilayer EXR: the
  * back-light view layer, and its AOVs: SSSThicknessSq (thickness squared,
  * scene units^2: the mean over samples of AO(inside, Distance D) x D^2,
- * which is t^2 for a slab of thickness t < D), or SSSThickness (scene
- * units), and SSSFacing (N . V). */
+ * which is t^2 for a slab of thickness t < D; read as the root of its mean
+ * over each pixel and its eight neighbours of the same material), or
+ * SSSThickness (scene units), and SSSFacing (N . V). */
 #define SSS_BACKLIGHT_LAYER "SSSBackLight"
 /* The layer sss_process_exr adds: Combined (RGBA) and DiffLight (RGB). */
 #define SSS_RESULT_LAYER "SSS"

@@ -6,6 +6,7 @@
  * same path. */
 #include "sss_internal.h"
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,6 +47,46 @@ static int has_usable_depth(const sss_image *depth)
 	return 0;
 }
 
+/* The thickness from its squared AOV into t (width x height): the root of
+ * the mean of t^2 over the pixel and its eight neighbours of the same
+ * material (a finite value each). The AOV is Ambient Occlusion with a few
+ * rays a sample, (t / D)^2 for a slab: where a part is thin against D most
+ * pixels read 0, and a thin part's reflectance (sss_thin.c), which falls
+ * steeply towards t = 0, read those zeros as no thickness at all. Pooled
+ * over nine pixels the bundled head's thin ears and eye sockets come out
+ * closest to the random walk (docs/transmission.md, "Thin parts lit from
+ * the front"). A slightly negative mean (filter noise) is 0, a pixel whose
+ * own value is NaN stays NaN. */
+static void thickness_from_squares(const sss_image *sq, const sss_image *index,
+                                   float *t)
+{
+	/* the material pass, where it is the AOV's size */
+	const sss_image *ix = index->data && index->width == sq->width &&
+	                      index->height == sq->height ? index : NULL;
+	for (int32_t y = 0; y < sq->height; y++)
+		for (int32_t x = 0; x < sq->width; x++) {
+			float own = sss__at(sq, x, y)[0];
+			float mine = ix ? sss__at(ix, x, y)[0] : 0.0f;
+			double sum = 0.0;
+			int n = 0;
+			for (int32_t v = y - 1; isfinite(own) && v <= y + 1; v++)
+				for (int32_t u = x - 1; u <= x + 1; u++) {
+					if (v < 0 || u < 0 || v >= sq->height ||
+					    u >= sq->width || (ix &&
+					    !(fabsf(sss__at(ix, u, v)[0] - mine) < 0.5f)))
+						continue;
+					float q = sss__at(sq, u, v)[0];
+					if (isfinite(q)) {
+						sum += q;
+						n++;
+					}
+				}
+			float mean = n ? (float)(sum / n) : own;
+			t[(size_t)y * sq->width + x] = mean > 0.0f ? sqrtf(mean)
+			                             : mean <= 0.0f ? 0.0f : mean;
+		}
+}
+
 /* The back-light layer's passes (SSS_BACKLIGHT_LAYER: DiffDir, DiffInd and
  * the thickness and facing AOVs) into passes; a thickness stored squared
  * becomes its square root in *thick_buf (allocated). No layer: nothing. */
@@ -76,20 +117,11 @@ static sss_result back_light_passes(const sss_exr *exr, const char *layer,
 	if (sss_exr_find(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, &v) !=
 	    SSS_OK)
 		return SSS_OK; /* sss_apply names the missing thickness */
-	int64_t stride = v.row_stride ? v.row_stride
-	                 : (int64_t)v.width * v.channels;
 	float *t = malloc((size_t)v.width * (size_t)v.height * sizeof *t);
 	if (!t)
 		return sss__fail(err, errlen, SSS_ERR_OUT_OF_MEMORY, "%s: out of "
 		                 "memory for the thickness pass", in);
-	/* The mean of t^2 over the samples: its root is the thickness; a
-	 * slightly negative value (filter noise) is 0, NaN stays NaN. */
-	for (int32_t y = 0; y < v.height; y++)
-		for (int32_t x = 0; x < v.width; x++) {
-			float sq = v.data[y * stride + (int64_t)x * v.channels];
-			t[(size_t)y * v.width + x] = sq > 0.0f ? sqrtf(sq)
-			                             : sq <= 0.0f ? 0.0f : sq;
-		}
+	thickness_from_squares(&v, &passes->index_ma, t);
 	*thick_buf = t;
 	passes->thickness = (sss_image){t, v.width, v.height, 1, 0};
 	return SSS_OK;

@@ -784,6 +784,103 @@ static void test_process(void)
 	rmdir(dir);
 }
 
+/* The squared thickness AOV (a few Ambient Occlusion rays a sample: zero
+ * at most pixels of a thin part) is pooled over each pixel's 3 x 3
+ * neighbours of its own material before the root (sss_frame.c). On the
+ * 8x8 render's floor (material 2, rows 4 - 7), a thin Random Walk (Skin)
+ * material: t^2 alternating 0 and 2 q gives the light of t^2 = q where
+ * the root of each pixel would give a mean of G(0) and G(sqrt(2 q)); and
+ * the other materials' t^2, however large, does not enter the floor's. */
+static double floor_light(const char *dir, const char *name, const float *sq,
+                          int c)
+{
+	char in[96], out[96], err[512];
+	snprintf(in, sizeof in, "%s/%s_in.exr", dir, name);
+	snprintf(out, sizeof out, "%s/%s_out.exr", dir, name);
+	sss_exr *exr = NULL;
+	if (sss_exr_read("tests/data/blender_8x8.exr", NULL, &exr, err,
+	                 sizeof err) != SSS_OK) {
+		CHECK("pool.read", 0, "%s", err);
+		return NAN;
+	}
+	float zero[8 * 8 * 3] = {0};
+	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffDir", "RGB", zero, err,
+	                 sizeof err);
+	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, "X",
+	                 sq, err, sizeof err);
+	CHECK_STATUS("pool.write", SSS_OK,
+	             sss_exr_write(exr, in, NULL, err, sizeof err));
+	sss_exr_free(exr);
+	const char *json =
+		"{\"materials\": [{\"pass_index\": 2, \"profile\": \"burley\","
+		" \"radius\": [0.05, 0.02, 0.01], \"albedo\": [0.8, 0.8, 0.8],"
+		" \"mapping\": \"cycles-random-walk\", \"calibration\":"
+		" \"cycles4-random-walk-skin\", \"thin_reflectance\": 1,"
+		" \"transmission\": \"burley\"}]}";
+	sss_scene *sc = NULL;
+	sss_scene_parse(json, strlen(json), &sc, NULL, 0, err, sizeof err);
+	CHECK_STATUS("pool.process", SSS_OK,
+	             sss_process_exr(in, out, sc, NULL, NULL, err, sizeof err));
+	sss_scene_free(sc);
+	double sum = 0.0;
+	sss_exr *res = NULL;
+	sss_image light;
+	if (sss_exr_read(out, NULL, &res, err, sizeof err) == SSS_OK &&
+	    sss_exr_find(res, "SSS", "DiffLight", &light) == SSS_OK)
+		for (int y = 4; y < 8; y++)
+			for (int x = 0; x < 8; x++)
+				sum += light.data[3 * (y * 8 + x) + c];
+	else
+		sum = NAN;
+	sss_exr_free(res);
+	unlink(in);
+	unlink(out);
+	return sum;
+}
+
+static void test_thickness_pool(void)
+{
+	char dir[] = "/tmp/sss_pool_XXXXXX";
+	if (!mkdtemp(dir)) {
+		CHECK("pool.tmpdir", 0, "mkdtemp failed");
+		return;
+	}
+	const float q = 0.005f * 0.005f; /* 5 mm: thin against 5 and 2 cm */
+	float even[64], checker[64], thick[64], apart[64];
+	for (int i = 0; i < 64; i++) {
+		int x = i % 8, y = i / 8;
+		even[i] = q;
+		checker[i] = (x + y) % 2 ? 2.0f * q : 0.0f;
+		thick[i] = 100.0f;
+	}
+	for (int c = 0; c < 2; c++) { /* red and green */
+		double e = floor_light(dir, "even", even, c);
+		double k = floor_light(dir, "checker", checker, c);
+		double t = floor_light(dir, "thick", thick, c);
+		CHECK("pool.thin", e < 0.9 * t && e > 0.0, "channel %d: %g, thick %g",
+		      c, e, t);
+		CHECK("pool.mean", fabs(k - e) <= 0.02 * e,
+		      "channel %d: alternating %g, even %g, thick %g", c, k, e, t);
+	}
+	/* Materials 1 and 3 and the background read thick, the floor q: the
+	 * floor's light is the same as with q everywhere (its pixels next to
+	 * materials 1 and 3 pool none of their 100). */
+	const char *floor = "........"
+	                    "..####.."
+	                    "###..###"
+	                    "###....#"
+	                    "########"
+	                    "########"
+	                    "########"
+	                    "########";
+	for (int i = 0; i < 64; i++)
+		apart[i] = floor[i] == '#' ? q : 100.0f;
+	double a = floor_light(dir, "apart", apart, 0);
+	double e = floor_light(dir, "even", even, 0);
+	CHECK("pool.materials", a == e, "%g against %g", a, e);
+	rmdir(dir);
+}
+
 /* What the add-on asks instead of computing it: how thick a part can be
  * before nothing crosses it (its thickness measurement's reach), and the
  * slab's coefficients (its shader evaluates the same T). */
@@ -1171,6 +1268,7 @@ int main(void)
 	           sizeof walk4_rw_measured / sizeof *walk4_rw_measured,
 	           WALK4_RW_FIT_RMS, WALK4_RW_FIT_WORST);
 	test_thin();
+	test_thickness_pool();
 	test_models();
 	test_extremes();
 	test_validation();
