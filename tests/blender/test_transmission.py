@@ -12,6 +12,7 @@ from helpers import BUILD, build_blend, diff, load_addon, snapshot
 
 separable_sss = load_addon()
 from separable_sss import blender_compat as compat  # noqa: E402
+from separable_sss import description  # noqa: E402
 from separable_sss import native, pipeline, transmission  # noqa: E402
 
 import faults  # noqa: E402
@@ -114,6 +115,48 @@ def test_thickness_and_facing_reach_the_pass_file(slab, tmp_path):
     print("slab: median thickness", thick, "facing", np.median(facing))
     assert abs(thick - 0.015) < 0.005
     assert np.median(facing) > 0.9
+
+
+def test_thin_parts_read_the_thickness(slab, tmp_path):
+    """Where the library measured the walk's thin parts lit from the front
+    (Random Walk (Skin) on 4.x: description.THIN_MEASURED), Match Energy
+    asks for their loss (thin_reflectance 1) and the back-light layer
+    writes the thickness for the baked slab too; elsewhere (3.4) neither,
+    and the slab's AOV stays 0 (its layer costs less without)."""
+    scene = open_scene(slab, tmp_path)
+    job = pipeline.prepare_render(bpy.context)
+    with open(job.scene_json) as f:
+        entry = json.load(f)["materials"][0]
+    inp = read_channels(job.input_exr)[0]
+    mask = np.rint(inp["ViewLayer.IndexMA.X"]) > 0
+    sq = inp[f"{transmission.LAYER}.{transmission.THICKNESS_AOV}.X"][mask]
+    thick = float(np.median(np.sqrt(np.maximum(sq, 0.0))))
+    print("slab:", entry.get("calibration"), "thin_reflectance",
+          entry.get("thin_reflectance"), "median thickness", thick)
+    assert entry["transmission_baked_scale"] > 0
+    if entry.get("calibration") in description.THIN_MEASURED:
+        assert entry["thin_reflectance"] == 1.0
+        assert abs(thick - 0.015) < 0.005
+    else:
+        assert "thin_reflectance" not in entry
+        assert thick == 0.0
+
+
+def test_mean_chord(slab, tmp_path):
+    """The AO distance's cap: 4 V / S of a closed mesh in world space (a
+    sphere's 4 R / 3, scaled with its object), none for an open one."""
+    open_scene(slab, tmp_path)
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.1, segments=64,
+                                         ring_count=32)
+    sphere = bpy.context.active_object
+    sphere.scale = (2.0, 2.0, 2.0)
+    bpy.context.view_layer.update()
+    graph = bpy.context.evaluated_depsgraph_get()
+    chord = transmission._mean_chord(sphere, graph)
+    print("sphere of radius 0.2: mean chord", chord)
+    assert chord == pytest.approx(4.0 * 0.2 / 3.0, rel=0.01)
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    assert transmission._mean_chord(bpy.context.active_object, graph) is None
 
 
 def test_restored_after_success(slab, tmp_path):
@@ -254,10 +297,20 @@ def test_slab_objects_tagged_only_during_render(slab, tmp_path):
     del bpy.data.objects["Cube"][transmission.PROP_ALBEDO]
     # The slab carries its table's row, step and scale, and the table is
     # an image; nothing is left afterwards.
-    mode, row, step, scale, albedo = seen["Cube"]
+    mode, row, step, scale, albedo, reach = seen["Cube"]
     assert mode == 2.0 and row == 0.0 and step > 0.0 and scale > 0.0
-    # and the albedo with which it reflects where an exit point sees it
+    # and, where the layer measures the thickness (thin parts' reflectance
+    # on 4.x), its AO distance: D, or the closed slab's mean chord 4 V / S
+    # where that is less
     found = pipeline.analyse(scene).materials[0]
+    if description.library_material(scene, found).get("thin_reflectance"):
+        w, h, t = bpy.data.objects["Cube"].dimensions
+        chord = 4.0 * w * h * t / (2.0 * (w * h + w * t + h * t))
+        d = transmission.ao_distance(scene, pipeline.analyse(scene))
+        assert reach == pytest.approx(min(d, chord), rel=1e-4)
+    else:
+        assert reach is None
+    # and the albedo with which it reflects where an exit point sees it
     assert np.allclose(list(albedo), found.albedo or found.color)
     assert len(seen["images"]) == 1
     assert all(p not in o for o in scene.objects for p in transmission.PROPS)
