@@ -699,6 +699,36 @@ static void test_scene_json(void)
 	      "%s", err);
 }
 
+/* The 8x8 Cycles render (tests/data/blender_8x8.exr, 8 x 8 pixels) with a
+ * layer SSSBackLight added, written to path: DiffDir rgb, DiffInd rgb too
+ * when with_ind, and SSSThicknessSq sq. 0 when written. */
+static int write_backlit(const char *path, const float *rgb, int with_ind,
+                         const float *sq, const char *id)
+{
+	char err[512], check[64];
+	sss_exr *exr = NULL;
+	snprintf(check, sizeof check, "%s.read", id);
+	if (sss_exr_read("tests/data/blender_8x8.exr", NULL, &exr, err,
+	                 sizeof err) != SSS_OK) {
+		CHECK(check, 0, "%s", err);
+		return -1;
+	}
+	snprintf(check, sizeof check, "%s.add", id);
+	CHECK_STATUS(check, SSS_OK,
+	             sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffDir", "RGB",
+	                              rgb, err, sizeof err));
+	if (with_ind)
+		sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffInd", "RGB", rgb,
+		                 err, sizeof err);
+	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, "X",
+	                 sq, err, sizeof err);
+	snprintf(check, sizeof check, "%s.write", id);
+	sss_result r = sss_exr_write(exr, path, NULL, err, sizeof err);
+	CHECK_STATUS(check, SSS_OK, r);
+	sss_exr_free(exr);
+	return r == SSS_OK ? 0 : -1;
+}
+
 /* The back-light layer of a Blender EXR, end to end: the 8x8 Cycles
  * render gets a layer SSSBackLight (DiffDir, DiffInd, SSSThicknessSq);
  * with transmission its SSS light is brighter by what crossed, and the
@@ -714,31 +744,14 @@ static void test_process(void)
 	snprintf(in, sizeof in, "%s/in.exr", dir);
 	snprintf(out_on, sizeof out_on, "%s/on.exr", dir);
 	snprintf(out_off, sizeof out_off, "%s/off.exr", dir);
-	sss_exr *exr = NULL;
-	if (sss_exr_read("tests/data/blender_8x8.exr", NULL, &exr, err,
-	                 sizeof err) != SSS_OK) {
-		CHECK("process.read", 0, "%s", err);
-		return;
-	}
-	int32_t w = sss_exr_width(exr), h = sss_exr_height(exr);
-	float *rgb = calloc((size_t)w * h * 3, sizeof *rgb);
-	float *sq = calloc((size_t)w * h, sizeof *sq);
+	const int32_t w = 8, h = 8;
+	float rgb[8 * 8 * 3], sq[8 * 8];
 	for (int i = 0; i < w * h * 3; i++)
 		rgb[i] = 0.5f;
 	for (int i = 0; i < w * h; i++)
 		sq[i] = 0.004f * 0.004f;
-	CHECK_STATUS("process.add", SSS_OK,
-	             sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffDir", "RGB",
-	                              rgb, err, sizeof err));
-	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffInd", "RGB", rgb, err,
-	                 sizeof err);
-	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, "X",
-	                 sq, err, sizeof err);
-	CHECK_STATUS("process.write", SSS_OK,
-	             sss_exr_write(exr, in, NULL, err, sizeof err));
-	sss_exr_free(exr);
-	free(rgb);
-	free(sq);
+	if (write_backlit(in, rgb, 1, sq, "process"))
+		return;
 
 	const char *tmpl =
 		"{\"materials\": [{\"pass_index\": 1, \"profile\": \"burley\","
@@ -797,20 +810,9 @@ static double floor_light(const char *dir, const char *name, const float *sq,
 	char in[96], out[96], err[512];
 	snprintf(in, sizeof in, "%s/%s_in.exr", dir, name);
 	snprintf(out, sizeof out, "%s/%s_out.exr", dir, name);
-	sss_exr *exr = NULL;
-	if (sss_exr_read("tests/data/blender_8x8.exr", NULL, &exr, err,
-	                 sizeof err) != SSS_OK) {
-		CHECK("pool.read", 0, "%s", err);
-		return NAN;
-	}
 	float zero[8 * 8 * 3] = {0};
-	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, "DiffDir", "RGB", zero, err,
-	                 sizeof err);
-	sss_exr_add_pass(exr, SSS_BACKLIGHT_LAYER, SSS_THICKNESS_SQ_PASS, "X",
-	                 sq, err, sizeof err);
-	CHECK_STATUS("pool.write", SSS_OK,
-	             sss_exr_write(exr, in, NULL, err, sizeof err));
-	sss_exr_free(exr);
+	if (write_backlit(in, zero, 0, sq, "pool"))
+		return NAN;
 	const char *json =
 		"{\"materials\": [{\"pass_index\": 2, \"profile\": \"burley\","
 		" \"radius\": [0.05, 0.02, 0.01], \"albedo\": [0.8, 0.8, 0.8],"
