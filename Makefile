@@ -371,13 +371,18 @@ sweep: deps all $(filter $(BUILD)/%,$(SWEEP_BLENDER))
 # time (blender_scripts/error_budget.py): out/error_budget/SCENE/
 # {budget.md,budget.json,errors.png,time.png} and out/error_budget/summary.md. The
 # reference renders (random walk, BUDGET_ARGS' --ref-samples, default
-# 1024) are kept in $(BUILD)/error_budget/ and reused. Ours (at 16, 32, 64
+# 1024) are kept in $(BUILD)/error_budget/cache/DIGEST/ and reused while
+# the scripts that build the scenes and render them are unchanged (DIGEST:
+# their SHA-1; a scene built otherwise gets new references). Ours (at 16, 32, 64
 # spp) and the walk are rendered with eight seeds and their squared errors
 # pooled: at 16 spp one seed's error is a draw (docs/comparison.md, over
 # seeds).
 BUDGET_SCENES ?= head marble mixed block sphere
 BUDGET_ARGS ?= --seeds 8 --samples 16,32,64
 BUDGET_BLENDER ?= $(word 1,$(BPY_BLENDERS))
+BUDGET_CACHE = $(BUILD)/error_budget/cache/$(shell cat \
+	blender_scripts/build_scene.py blender_scripts/compare_runs.py | \
+	sha1sum | cut -c1-12)
 error-budget: deps all $(filter $(BUILD)/%,$(BUDGET_BLENDER))
 	@mkdir -p out/error_budget $(BUILD)/error_budget
 	@for kind in $(BUDGET_SCENES); do \
@@ -390,7 +395,7 @@ error-budget: deps all $(filter $(BUILD)/%,$(BUDGET_BLENDER))
 			--python blender_scripts/error_budget.py -- \
 			--scene $(BUILD)/error_budget/$$kind.blend --name $$kind \
 			--out out/error_budget/$$kind \
-			--cache $(BUILD)/error_budget/cache $(BUDGET_ARGS) >>$$log 2>&1 \
+			--cache $(BUDGET_CACHE) $(BUDGET_ARGS) >>$$log 2>&1 \
 			|| { tail -n 40 $$log; exit 1; }; \
 		grep -E '^(budget|\|)' $$log; \
 	done

@@ -68,6 +68,48 @@ def assign(obj, mat):
     return obj
 
 
+def closed_parts(obj, name):
+    """obj's mesh closed and each loose part made an object of its own,
+    the largest keeping obj's name, the others called name; yields them,
+    largest first, each selected and active as it is yielded.
+
+    Suzanne's eyes are open caps set into holes of an open head. In one
+    object the random walk leaves the skin through the caps and the holes,
+    which darkens a ring round each eye: the Subsurface Scattering node's
+    manual says Random Walk "works best for closed meshes. Overlapping
+    faces and holes in the mesh can cause problems", and Cycles' commit
+    that added it (D3054) that "geometry like eyes or mouth can darken the
+    skin on the outside". A character's eyes are objects of their own, and
+    so are these (docs/comparison.md, "The head's eyes")."""
+    import bmesh
+    mesh = bmesh.new()
+    mesh.from_mesh(obj.data)
+    bmesh.ops.holes_fill(mesh, edges=mesh.edges, sides=0)
+    mesh.to_mesh(obj.data)
+    mesh.free()
+    select_only(obj)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.separate(type="LOOSE")
+    bpy.ops.object.mode_set(mode="OBJECT")
+    parts = sorted(bpy.context.selected_objects,
+                   key=lambda o: -len(o.data.polygons))
+    base = obj.name
+    for part in parts:  # out of the way of the names below
+        part.name = "closed_parts"
+    for i, part in enumerate(parts):
+        part.name = base if i == 0 else f"{name}.{i}"
+    for part in parts:
+        select_only(part)
+        yield part
+
+
+def select_only(obj):
+    for other in bpy.context.view_layer.objects:
+        other.select_set(other == obj)
+    bpy.context.view_layer.objects.active = obj
+
+
 def clear(scene):
     for obj in list(scene.objects):
         if obj.type in ("MESH", "LIGHT"):
@@ -111,11 +153,11 @@ def build_demo(scene, subsurface=0.02):
         "radius": (1.0, 0.35, 0.2),
         "subsurface_color": (0.85, 0.45, 0.35, 1.0), "roughness": 0.45})
     bpy.ops.mesh.primitive_monkey_add(size=0.22, location=(0, 0, 0))
-    head = bpy.context.active_object
-    mod = head.modifiers.new("smooth", "SUBSURF")
-    mod.levels = mod.render_levels = 2
-    bpy.ops.object.shade_smooth()
-    assign(head, skin)
+    for part in closed_parts(bpy.context.active_object, "Eye"):
+        mod = part.modifiers.new("smooth", "SUBSURF")
+        mod.levels = mod.render_levels = 2
+        bpy.ops.object.shade_smooth()
+        assign(part, skin)
     backdrop = material("Backdrop", **{"base": (0.05, 0.05, 0.06, 1),
                                        "roughness": 0.9})
     bpy.ops.mesh.primitive_plane_add(size=4, location=(0, 0.6, 0),
@@ -243,8 +285,7 @@ def build_mixed(scene):
     """Two profiles (skin, jade) and a non-scattering pillar in front of
     both: scattering must not bleed across the pillar's silhouette. The
     jade is a bangle (a torus): a closed mesh, as the random walk needs
-    (Suzanne's eyes are separate shells inside the head, which the walk
-    leaves through). Scattering lengths are about a quarter of each
+    (closed_parts). Scattering lengths are about a quarter of each
     object's thickness: the skin's red 11 cm on a 45 cm sphere, the jade's
     green 5.5 cm across the bangle's 22 cm band."""
     skin = random_walk(material("Skin", **{
