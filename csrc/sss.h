@@ -65,7 +65,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a public struct or signature changes. */
-#define SSS_ABI_VERSION 14
+#define SSS_ABI_VERSION 15
 #define SSS_VERSION_STRING "0.1.0"
 
 /* ---------------------------------------------------------------- status */
@@ -480,6 +480,14 @@ SSS_API sss_result sss_transmittance(const sss_material *mat,
  * material does not transmit. */
 SSS_API sss_result sss_transmission_reach(const sss_material *mat,
                                           double *metres);
+
+/* Whether the library has measured how much light this material's thin
+ * parts reflect, lit from the front (thin_reflectance has an effect):
+ * *measured 1 for a Burley profile with Blender 4.x's Random Walk (Skin)
+ * calibration and mapping, 0 otherwise, whatever its thin_reflectance.
+ * An invalid material (sss_material_validate) is
+ * SSS_ERR_INVALID_ARGUMENT. */
+SSS_API sss_result sss_thin_measured(const sss_material *mat, int *measured);
 
 /* The diffusion slab behind SSS_TRANSMISSION_BURLEY on a Burley profile,
  * per channel, in metres at radius_scale 1 (sss_transmission.c): T(t) =

@@ -35,16 +35,35 @@ struct sss__thin {
 	int32_t count;
 };
 
+/* The table measured for the material's walk, or NULL: none. */
+static const sss__thin_table *measured_table(const sss_material *mat)
+{
+	if (mat->kind == SSS_PROFILE_BURLEY &&
+	    mat->calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
+	    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK)
+		return &sss__walk4_skin_thin;
+	return NULL;
+}
+
 /* The measured table material m asks for, or NULL: none measured for
  * its walk, thin_reflectance 0 or the thickness scaled to nothing. */
 static const sss__thin_table *thin_table(const sss_material *mat)
 {
-	if (mat->kind == SSS_PROFILE_BURLEY &&
-	    mat->calibration == SSS_CALIBRATION_CYCLES4_RANDOM_WALK_SKIN &&
-	    mat->burley_mapping == SSS_BURLEY_CYCLES_RANDOM_WALK &&
-	    mat->thin_reflectance > 0.0f && mat->thickness_scale > 0.0f)
-		return &sss__walk4_skin_thin;
+	if (mat->thin_reflectance > 0.0f && mat->thickness_scale > 0.0f)
+		return measured_table(mat);
 	return NULL;
+}
+
+sss_result sss_thin_measured(const sss_material *mat, int *measured)
+{
+	if (!measured)
+		return SSS_ERR_INVALID_ARGUMENT;
+	*measured = 0;
+	sss_result r = sss_material_validate(mat, NULL, 0);
+	if (r)
+		return r;
+	*measured = measured_table(mat) != NULL;
+	return SSS_OK;
 }
 
 /* G of one table row at x (1 from the last column on). */

@@ -1238,6 +1238,29 @@ static void test_thin(void)
 	CHECK("thin.other-walk", thin_front(&m3, 0.8f, 1.0f, 0.004f, 1, 0) ==
 	      thin_front(&m3, 0.8f, 0.0f, 0.004f, 1, 0), "changed");
 
+	/* What sss_thin_measured says is what the scatter does: a table for
+	 * 4.x's Random Walk (Skin) whatever thin_reflectance, none for the
+	 * others. */
+	int measured = -1;
+	sss_material m0 = m;
+	m0.thin_reflectance = 0.0f;
+	CHECK("thin.query-skin", sss_thin_measured(&m0, &measured) == SSS_OK &&
+	      measured == 1, "%d", measured);
+	CHECK("thin.query-3x", sss_thin_measured(&m3, &measured) == SSS_OK &&
+	      measured == 0, "%d", measured);
+	sss_material plain = m;
+	plain.calibration = SSS_CALIBRATION_NONE;
+	CHECK("thin.query-none", sss_thin_measured(&plain, &measured) ==
+	      SSS_OK && measured == 0 &&
+	      thin_front(&plain, 0.8f, 1.0f, 0.004f, 1, 0) ==
+	      thin_front(&plain, 0.8f, 0.0f, 0.004f, 1, 0), "%d", measured);
+	sss_material badm = m;
+	badm.thin_reflectance = 2.0f;
+	CHECK("thin.query-invalid", sss_thin_measured(&badm, &measured) ==
+	      SSS_ERR_INVALID_ARGUMENT && measured == 0, "%d", measured);
+	CHECK("thin.query-null", sss_thin_measured(&m, NULL) ==
+	      SSS_ERR_INVALID_ARGUMENT, "accepted");
+
 	/* A baked back light: T(0) at any thickness the pass gives. */
 	char err[256];
 	sss_material b = walk(WALK_SKIN, 0.8f);

@@ -25,15 +25,9 @@ def method_name(identifier):
 # settings: the calibration follows Match Energy, the baked scale the
 # back-light layer (_with_baked), the walk's surface the material's IOR,
 # Specular IOR Level and Roughness (_burley), thin_reflectance Match Energy
-# where the library measured the walk's thin parts (THIN_MEASURED).
+# where the library measured the walk's thin parts (native.thin_measured).
 DERIVED = ("transmission_baked_scale", "calibration", "thin_reflectance",
            "walk_ior", "walk_roughness")
-
-# The calibrations whose thin parts lit from the front libsss measured
-# (csrc/sss_thin.c): Match Energy takes their full loss (thin_reflectance
-# 1), read from the back-light layer's thickness (docs/transmission.md,
-# "Thin parts lit from the front").
-THIN_MEASURED = ("cycles4-random-walk-skin",)
 
 # The setting a field is stored as where it is not the field's member
 # (the name .blend files and presets already hold).
@@ -130,13 +124,27 @@ def _burley(found, entry, fields):
                            for a in (found.albedo or found.color)]
     if s.match_energy and walk:
         entry["calibration"] = walk[1]
-        if walk[1] in THIN_MEASURED:
+        # Where libsss measured how much light thin parts lit from the
+        # front lose through their back (csrc/sss_thin.c), Match Energy
+        # takes all of that loss, read from the back-light layer's
+        # thickness (docs/transmission.md, "Thin parts lit from the
+        # front").
+        if _thin_measured(entry):
             entry["thin_reflectance"] = 1.0
         # 4.x's plain Random Walk enters through the material's own
         # surface, and its energy follows that surface's index and
         # roughness.
         entry["walk_ior"] = found.walk_ior
         entry["walk_roughness"] = found.walk_roughness
+
+
+def _thin_measured(entry):
+    """native.thin_measured, False for an entry the library refuses (the
+    scatter names the bad field)."""
+    try:
+        return native.thin_measured(entry)
+    except native.LibraryError:
+        return False
 
 
 def camera_entry(scene):

@@ -10,7 +10,7 @@ import platform
 import sys
 import threading
 
-ABI_VERSION = 14  # must match SSS_ABI_VERSION in csrc/sss.h
+ABI_VERSION = 15  # must match SSS_ABI_VERSION in csrc/sss.h
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -178,6 +178,7 @@ def _declare(lib):
                                           c.POINTER(c.c_double)]),
         "sss_transmission_reach": (c.c_int32, [c.c_void_p,
                                                c.POINTER(c.c_double)]),
+        "sss_thin_measured": (c.c_int32, [c.c_void_p, c.POINTER(c.c_int)]),
         "sss_transmission_slab": (c.c_int32, [c.c_void_p] +
                                   [c.POINTER(c.c_double)] * 3),
         "sss_transmission_table": (c.c_int32, [c.c_void_p, c.c_int32,
@@ -466,6 +467,16 @@ def transmission_reach(material):
     """Metres of thickness beyond which the material lets (almost) nothing
     through; 0 when it does not transmit."""
     return _metres(library().sss_transmission_reach, material)
+
+
+def thin_measured(material):
+    """Whether the library measured how much light the material's thin
+    parts reflect, lit from the front (its thin_reflectance has an
+    effect)."""
+    out = ctypes.c_int()
+    with _material(material) as row:
+        _check(library().sss_thin_measured(row, ctypes.byref(out)), None)
+    return bool(out.value)
 
 
 def transmission_slab(material):

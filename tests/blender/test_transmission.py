@@ -119,7 +119,7 @@ def test_thickness_and_facing_reach_the_pass_file(slab, tmp_path):
 
 def test_thin_parts_read_the_thickness(slab, tmp_path):
     """Where the library measured the walk's thin parts lit from the front
-    (Random Walk (Skin) on 4.x: description.THIN_MEASURED), Match Energy
+    (the slab's Random Walk (Skin) on 4.x: native.thin_measured), Match Energy
     asks for their loss (thin_reflectance 1) and the back-light layer
     writes the thickness for the baked slab too; elsewhere (3.4) neither,
     and the slab's AOV stays 0 (its layer costs less without)."""
@@ -134,7 +134,9 @@ def test_thin_parts_read_the_thickness(slab, tmp_path):
     print("slab:", entry.get("calibration"), "thin_reflectance",
           entry.get("thin_reflectance"), "median thickness", thick)
     assert entry["transmission_baked_scale"] > 0
-    if entry.get("calibration") in description.THIN_MEASURED:
+    assert native.thin_measured(entry) == (bpy.app.version >= (4, 0, 0))
+    if bpy.app.version >= (4, 0, 0):
+        assert entry["calibration"] == "cycles4-random-walk-skin"
         assert entry["thin_reflectance"] == 1.0
         assert abs(thick - 0.015) < 0.005
     else:
