@@ -64,10 +64,11 @@ from compare_runs import (ROOT, Bench, denoise_rows,  # noqa: E402
                           run_rw, run_sss_off)
 import separable_sss  # noqa: E402
 from separable_sss import blender_compat as compat  # noqa: E402
-from separable_sss import description, native  # noqa: E402
+from separable_sss import description, native, pipeline  # noqa: E402
 
 from compare_figures import contact_sheet, plot, time_plot  # noqa: E402
 from compare_report import score, summarise, write_tables  # noqa: E402
+import mesh_check  # noqa: E402
 from script_cli import run_main, script_argv  # noqa: E402
 
 
@@ -146,6 +147,10 @@ def main():
     bench.methods = library_methods()
     scene = open_scene(args, "CYCLES")
     bench.default_method = description.method_name(scene.sss.method)
+    bench.mesh_notes = mesh_check.notes(
+        scene, [f.material for f in pipeline.analyse(scene).materials])
+    for note in bench.mesh_notes:
+        log(f"{args.name}: note: {note}")
     run_rw(bench, args)
     run_sss_off(bench, args)
     if not args.no_denoise:

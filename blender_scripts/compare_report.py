@@ -157,6 +157,7 @@ def summarise(bench, args):
             out.append(f"  eevee own SSS {r['samples']} spp: RMSE "
                        f"{err(r, 'rmse'):.4g} in {r['total_s']:.2f} s")
     out.append(equal_time(bench, args)[0])
+    out += [f"  note: {n}" for n in bench.mesh_notes]
     return out
 
 

@@ -96,6 +96,7 @@ class Bench:
         self.rows = []     # dicts: renderer, method, samples, times, image
         self.mask = None
         self.skipped = []
+        self.mesh_notes = []  # mesh_check.notes: where the walk differs
         self.ref_halves = None
         self.edges = None
 

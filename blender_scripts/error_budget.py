@@ -369,6 +369,10 @@ def run(args):
     found = pipeline.analyse(scene)
     if not found.materials:
         raise RuntimeError("nothing scatters in this scene")
+    import mesh_check
+    notes = mesh_check.notes(scene, [f.material for f in found.materials])
+    for note in notes:
+        log(f"{args.name}: note: {note}")
     halves = reference(args, scene)
     ref = (halves[0] + halves[1]) / 2
     layer = bpy_layer_name()
@@ -414,7 +418,8 @@ def run(args):
         [s["images"][plain_key][0] for s in seeds], faces)
     result = dict(scene=args.name, resolution=list(args.resolution),
                   ref_samples=args.ref_samples, blender=blender_version(),
-                  seeds=args.seeds, runs=rows, budget=rows_b)
+                  seeds=args.seeds, runs=rows, budget=rows_b,
+                  mesh_notes=notes)
     with open(os.path.join(args.out, "budget.json"), "w") as f:
         json.dump(result, f, indent=1)
     with open(os.path.join(args.out, "budget.md"), "w") as f:
@@ -527,6 +532,8 @@ def markdown(results):
                        f"{x['mean_ratio']:.3f} |")
     out.append("")
     out += [equal_time_line(r) for r in results]
+    out += [f"{r['scene']}: note: {n}" for r in results
+            for n in r.get("mesh_notes", ())]
     return "\n".join(out) + "\n"
 
 

@@ -188,3 +188,36 @@ def test_sweep_radius(tmp_path):
          "--", "--scene", blend, "--out", str(out), "--scales", "0,1"],
         capture_output=True, text=True, timeout=120, env=env)
     assert proc.returncode != 0 and "--scales" in proc.stderr
+
+
+def test_mesh_notes(tmp_path):
+    """mesh_check names the scattering meshes Cycles' walk leaves through
+    (holes, loose parts), and only those: the bundled head, closed and its
+    eyes apart, has none; Suzanne as Blender adds her has both; a closed
+    sphere and an open plane of another material have none."""
+    import sys
+    sys.path.insert(0, os.path.join(ROOT, "blender_scripts"))
+    import mesh_check
+    bpy.ops.wm.open_mainfile(
+        filepath=build_blend("head", str(tmp_path / "head.blend")))
+    skin = bpy.data.materials["Skin"]
+    scene = bpy.context.scene
+    assert [o.name for o in scene.objects if o.type == "MESH" and
+            o.material_slots[0].material == skin] == \
+        ["Eye.1", "Eye.2", "Suzanne"]
+    assert mesh_check.notes(scene, [skin]) == []
+
+    bpy.ops.mesh.primitive_monkey_add(location=(3, 0, 0))
+    monkey = bpy.context.active_object
+    monkey.name = "Open monkey"
+    monkey.data.materials.append(skin)
+    bpy.ops.mesh.primitive_uv_sphere_add(location=(-3, 0, 0))
+    bpy.context.active_object.data.materials.append(skin)
+    bpy.ops.mesh.primitive_plane_add(location=(0, 3, 0))
+    bpy.context.active_object.data.materials.append(
+        bpy.data.materials.new("Other"))
+    notes = mesh_check.notes(scene, [skin])
+    assert len(notes) == 1, notes
+    assert notes[0].startswith("Open monkey: 42 edges on one face only "
+                               "(holes), 3 loose parts"), notes
+    assert mesh_check.notes(scene, []) == []
