@@ -46,7 +46,8 @@ def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="build_scene.py")
     p.add_argument("--kind", choices=("demo", "head", "two", "none", "marble", "mixed",
-                                            "block", "slab", "sphere"), required=True)
+                                            "block", "slab", "sphere", "cup",
+                                            "dome"), required=True)
     p.add_argument("--out", required=True)
     p.add_argument("--size", type=int, default=64)
     p.add_argument("--samples", type=int, default=8)
@@ -379,6 +380,37 @@ def build_slab(scene):
     place_camera(scene, (0.0, -1.0, 0.0), (0, 0, 0), 50)
 
 
+def build_shell(scene, cup):
+    """The slab's skin, 1.5 cm thick, bent into half a sphere's shell of
+    6 cm outer radius and lit only from behind: the cup shows the camera
+    its inside (the inside of an ear), the dome its outside. Back-lit
+    curved thin parts measured by measure_transmission.py
+    (docs/transmission.md, "Glow between facing parts")."""
+    import bmesh
+    build_slab(scene)
+    skin = bpy.data.materials["Skin"]
+    bpy.data.objects.remove(bpy.data.objects["Cube"], do_unlink=True)
+    mesh = bpy.data.meshes.new("Shell")
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=64, v_segments=32,
+                              radius=0.06)
+    side = 1.0 if cup else -1.0  # the half away from the camera, or near
+    bmesh.ops.delete(bm, geom=[v for v in bm.verts if side * v.co.y < -1e-7],
+                     context="VERTS")
+    bm.to_mesh(mesh)
+    bm.free()
+    shell = bpy.data.objects.new("Shell", mesh)
+    scene.collection.objects.link(shell)
+    solid = shell.modifiers.new("thickness", "SOLIDIFY")
+    solid.thickness = 0.015
+    solid.offset = -1.0  # inwards: the outer radius stays 6 cm
+    solid.use_even_offset = True
+    for poly in mesh.polygons:
+        poly.use_smooth = True
+    assign(shell, skin)
+    place_camera(scene, (0.0, -0.3, 0.0), (0, 0, 0), 50)  # fills the frame
+
+
 def build_sphere(scene):
     """An 8 cm skin sphere lit from the front, seen by an orthographic
     camera close up: at large radius scales (make sweep at 100-1000x: 1 to
@@ -418,6 +450,8 @@ def main():
         build_slab(scene)
     elif args.kind == "sphere":
         build_sphere(scene)
+    elif args.kind in ("cup", "dome"):
+        build_shell(scene, cup=args.kind == "cup")
     else:
         build_two(scene, scatter=args.kind == "two")
     compat.ensure_nodes(scene.world).nodes["Background"].inputs["Color"] \

@@ -17,7 +17,9 @@ Error (compare_metrics: RMSE and relative MAE, full and quarter
 resolution) over the scattering pixels and over the back-lit ones: the
 scattering pixels where the light arriving from behind (the back-light
 layer's DiffDir + DiffInd, luminance) is at least 5 % of its 99th
-percentile there. Writes results.txt, results.json and sheet.png
+percentile there; and ours over the walk per channel, summed over the
+pixels three or more inside the outline (the shapes of build_scene.py
+--kind cup, dome). Writes results.txt, results.json and sheet.png
 (reference | blur alone | blur + transmission | back light, with the
 |error| maps below, same exposure)."""
 import argparse
@@ -299,6 +301,20 @@ def slab_sweep(args):
         json.dump(rows, f, indent=1)
 
 
+def inside(mask, margin):
+    """The pixels of mask whose every pixel within margin (a square) is
+    in mask too."""
+    h, w = mask.shape
+    out = mask.copy()
+    for dy in range(-margin, margin + 1):
+        for dx in range(-margin, margin + 1):
+            shifted = np.zeros_like(mask)
+            shifted[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)] = \
+                mask[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0)]
+            out &= shifted
+    return out
+
+
 def main():
     args = parse_args()
     if args.slab_sweep:
@@ -382,6 +398,18 @@ def main():
             f"{row[True]['rel_mae']:.4f} ({cut_mae:.0f} % less); quarter-res "
             f"RMSE {row[False]['rmse_q']:.5f} -> {row[True]['rmse_q']:.5f}")
         summary[name] = {str(k): v for k, v in row.items()}
+    inner = inside(mask, 3)
+    if inner.any():
+        ratio = {on: results[on][0][inner].sum(0) / ref[inner].sum(0)
+                 for on in (False, True)}
+        lines.append(
+            f"ours over the walk, {int(inner.sum())} pixels 3 or more "
+            "inside the outline: blur alone " +
+            " / ".join(f"{v:.3f}" for v in ratio[False]) +
+            ", with transmission " +
+            " / ".join(f"{v:.3f}" for v in ratio[True]))
+        summary["inside_ratio"] = {str(k): v.tolist()
+                                   for k, v in ratio.items()}
     lines.append(f"library scatter time: off {results[False][1]:.3f} s, "
                  f"on {results[True][1]:.3f} s")
     text = "\n".join(lines)
