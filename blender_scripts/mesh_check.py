@@ -11,7 +11,13 @@ comparison.md, "The head's eyes"). make compare and the error budget
 print one note per such object, so that a difference is read for what it
 is.
 """
+import os
+import sys
+
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__))), "addon"))
 
 
 def _parts(edges, vertex_count):
@@ -36,25 +42,17 @@ def _parts(edges, vertex_count):
 def mesh_facts(obj, depsgraph):
     """(edges on one face only, edges on more than two, loose parts) of
     the object's evaluated mesh; None where it has no faces."""
-    evaluated = obj.evaluated_get(depsgraph)
-    try:
-        mesh = evaluated.to_mesh()
-    except RuntimeError:
-        return None
-    try:
-        if mesh is None or not mesh.polygons:
+    from separable_sss.transmission import edge_faces, evaluated_mesh
+    with evaluated_mesh(obj, depsgraph) as mesh:
+        if mesh is None:
             return None
-        loop_edges = np.empty(len(mesh.loops), np.int64)
-        mesh.loops.foreach_get("edge_index", loop_edges)
-        faces = np.bincount(loop_edges, minlength=len(mesh.edges))
+        faces = edge_faces(mesh)
         verts = np.empty(len(mesh.edges) * 2, np.int64)
         mesh.edges.foreach_get("vertices", verts)
         used = faces > 0
         parts = _parts(verts.reshape(-1, 2)[used], len(mesh.vertices))
         return (int(np.count_nonzero(faces == 1)),
                 int(np.count_nonzero(faces > 2)), parts)
-    finally:
-        evaluated.to_mesh_clear()
 
 
 def notes(scene, materials):

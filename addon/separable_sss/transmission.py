@@ -26,6 +26,7 @@ The add-on asks for it only when it can add something visible (wanted): a
 scattering material transmits, a light reaches one of its objects from
 behind (or the world is bright), and the light can cross more than half a
 pixel of it. It removes the layer, its material and its AOVs afterwards."""
+import contextlib
 import math
 
 import bpy
@@ -462,22 +463,38 @@ def _albedo(material, albedos):
     return None
 
 
+@contextlib.contextmanager
+def evaluated_mesh(obj, depsgraph):
+    """The object's evaluated mesh (None where it has none, or no faces),
+    freed on leaving."""
+    evaluated = obj.evaluated_get(depsgraph)
+    try:
+        mesh = evaluated.to_mesh()
+    except RuntimeError:
+        yield None
+        return
+    try:
+        yield mesh if mesh is not None and mesh.polygons else None
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def edge_faces(mesh):
+    """How many faces each edge of the mesh borders (numpy, per edge)."""
+    edges = np.empty(len(mesh.loops), np.int64)
+    mesh.loops.foreach_get("edge_index", edges)
+    return np.bincount(edges, minlength=len(mesh.edges))
+
+
 def _mean_chord(obj, depsgraph):
     """4 V / S of the object's evaluated mesh in world space, or None
     where it is not closed (an edge of more than two faces, or more than
     CLOSED_HOLES of its edges on one face only: a dense UV sphere's poles
     leave a few) or encloses nothing."""
-    evaluated = obj.evaluated_get(depsgraph)
-    try:
-        mesh = evaluated.to_mesh()
-    except RuntimeError:
-        return None
-    try:
-        if mesh is None or not mesh.polygons or not mesh.edges:
+    with evaluated_mesh(obj, depsgraph) as mesh:
+        if mesh is None or not mesh.edges:
             return None
-        edges = np.empty(len(mesh.loops), np.int64)
-        mesh.loops.foreach_get("edge_index", edges)
-        faces = np.bincount(edges, minlength=len(mesh.edges))
+        faces = edge_faces(mesh)
         if np.any(faces > 2) or np.count_nonzero(faces < 2) > \
                 CLOSED_HOLES * len(mesh.edges):
             return None
@@ -487,8 +504,6 @@ def _mean_chord(obj, depsgraph):
         mesh.loop_triangles.foreach_get("vertices", tri)
         co = np.empty(len(mesh.vertices) * 3, np.float64)
         mesh.vertices.foreach_get("co", co)
-    finally:
-        evaluated.to_mesh_clear()
     world = np.array(obj.matrix_world, np.float64)
     co = co.reshape(-1, 3) @ world[:3, :3].T + world[:3, 3]
     a, b, c = (co[tri.reshape(-1, 3)[:, k]] for k in range(3))
